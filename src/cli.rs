@@ -1,0 +1,173 @@
+//! Command-line flags (clap derive). Flags stop here: each command gets a validated config struct.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context};
+use clap::{Args, Parser, Subcommand};
+
+use crate::commands;
+
+/// Teach a simulated UR5 to pick up objects it has never seen, from a few dozen labelled grasps.
+#[derive(Debug, Parser)]
+#[command(name = "graspmap", version, about)]
+pub struct Cli {
+    #[command(flatten)]
+    pub global: GlobalArgs,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Flags every command takes.
+#[derive(Debug, Args, Clone)]
+pub struct GlobalArgs {
+    /// Data directory: labels in DIR/labels, model and evaluations in DIR/affordance.
+    #[arg(long, global = true, default_value = "data", value_name = "DIR")]
+    pub data: PathBuf,
+    /// Directory of object models, each <Name>/model.urdf [default: the bundled assets/objects].
+    #[arg(long = "objects-dir", global = true, value_name = "DIR")]
+    pub objects_dir: Option<PathBuf>,
+    /// Train/test split JSON {"train": [..], "test": [..]} [default: <objects-dir>/split.json].
+    #[arg(long, global = true, value_name = "FILE")]
+    pub split: Option<PathBuf>,
+    /// Worker threads for CPU-heavy work [default: all cores].
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
+    /// Also write the results as JSON to PATH ('-' = stdout).
+    #[arg(long, global = true, value_name = "PATH")]
+    pub json: Option<PathBuf>,
+    /// Print only results and errors, no progress.
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Drop objects into bin 1 and save the top-down camera image.
+    Scene(SceneArgs),
+    /// Drop one object and run one simulated pick attempt.
+    Grasp(GraspArgs),
+}
+
+/// `graspmap scene`.
+#[derive(Debug, Args)]
+pub struct SceneArgs {
+    /// Comma-separated object names, dropped in this order.
+    #[arg(long, value_delimiter = ',', required = true, num_args = 1..)]
+    pub objects: Vec<String>,
+    /// Seed of the drop poses.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output RGB image (.png).
+    #[arg(long, value_name = "PNG")]
+    pub out: PathBuf,
+    /// Also write the depth image as 16-bit PNG in millimetres.
+    #[arg(long, value_name = "PNG")]
+    pub depth: Option<PathBuf>,
+}
+
+/// `graspmap grasp`.
+#[derive(Debug, Args)]
+#[command(group = clap::ArgGroup::new("policy").required(true).args(["pixel", "oracle", "random"]))]
+pub struct GraspArgs {
+    /// Object to drop into bin 1.
+    #[arg(long)]
+    pub object: String,
+    /// Seed of the drop pose (and of --random's choice).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Grasp centre as column,row in the 128 × 128 image (needs --angle).
+    #[arg(long, value_name = "U,V", requires = "angle")]
+    pub pixel: Option<String>,
+    /// Grasp angle in degrees, clockwise in the image; normalised mod 180.
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true, requires = "pixel")]
+    pub angle: Option<f32>,
+    /// Let the oracle planner choose the grasp from ground-truth mask and depth.
+    #[arg(long)]
+    pub oracle: bool,
+    /// A uniformly random pixel on bin 1's floor area and a random angle.
+    #[arg(long)]
+    pub random: bool,
+    /// Write an animated GIF of the attempt from an oblique view.
+    #[arg(long, value_name = "GIF")]
+    pub record: Option<PathBuf>,
+    /// Grip force per finger in newtons.
+    #[arg(long, default_value_t = 40.0)]
+    pub grip_force: f32,
+    /// Also save the camera image with the grasp drawn (.png).
+    #[arg(long, value_name = "PNG")]
+    pub image: Option<PathBuf>,
+}
+
+/// Parses a `U,V` pixel and checks that it lies in the 128 × 128 image.
+pub fn parse_pixel(text: &str) -> anyhow::Result<(u32, u32)> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [u, v] = parts.as_slice() else {
+        bail!("--pixel '{text}' must be two integers U,V, e.g. --pixel 64,70");
+    };
+    let parse = |s: &str| {
+        s.parse::<u32>()
+            .with_context(|| format!("--pixel '{text}': '{s}' is not a non-negative integer"))
+    };
+    let (u, v) = (parse(u)?, parse(v)?);
+    if u >= 128 || v >= 128 {
+        bail!("--pixel {u},{v} is outside the 128 × 128 image (use 0..=127 for each)");
+    }
+    Ok((u, v))
+}
+
+/// Parses flags and runs the chosen command.
+pub fn run() -> anyhow::Result<()> {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+                e.print()?;
+                return Ok(());
+            }
+            // clap's own message names the flag and the fix; keep its first line only.
+            let text = e.to_string();
+            let first = text.lines().next().unwrap_or("bad arguments");
+            bail!("{} (see graspmap --help)", first.trim_start_matches("error: "));
+        }
+    };
+    init_logging(cli.global.quiet);
+    let context = commands::Context::from_args(&cli.global)?;
+    match cli.command {
+        Command::Scene(args) => commands::scene::run(&context, args),
+        Command::Grasp(args) => commands::grasp::run(&context, args),
+    }
+}
+
+fn init_logging(quiet: bool) {
+    let default = if quiet { "warn" } else { "info" };
+    let filter = tracing_subscriber::EnvFilter::try_from_env("GRASPMAP_LOG")
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .without_time()
+        .with_target(false)
+        .try_init();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pixel_parsing_rejects_out_of_image_and_garbage() {
+        assert_eq!(parse_pixel("64,70").unwrap(), (64, 70));
+        assert_eq!(parse_pixel(" 0 , 127 ").unwrap(), (0, 127));
+        assert!(parse_pixel("128,3").unwrap_err().to_string().contains("outside"));
+        assert!(parse_pixel("-1,3").unwrap_err().to_string().contains("'-1'"));
+        assert!(parse_pixel("12").unwrap_err().to_string().contains("two integers"));
+    }
+
+    #[test]
+    fn cli_definition_is_consistent() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+    }
+}

@@ -1,0 +1,18 @@
+//! graspmap: learn top-down grasps for a simulated UR5 from a few dozen labels (spatial action maps).
+//!
+//! Layers, one way only: the pure core (`camera`, `render`, `grasp`, `kinematics`, `oracle`) does
+//! no I/O; `urdf` and `objects` read model files; `sim` is the rapier workcell; `commands` and
+//! `cli` orchestrate.
+
+pub mod camera;
+pub mod cli;
+pub mod commands;
+pub mod grasp;
+pub mod kinematics;
+pub mod objects;
+pub mod oracle;
+pub mod output;
+pub mod raycast;
+pub mod render;
+pub mod sim;
+pub mod urdf;

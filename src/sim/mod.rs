@@ -1,0 +1,492 @@
+//! The physical workcell in rapier3d: ground, two totes, the UR5 on its pedestal, the gripper and dropped objects.
+//!
+//! Everything here uses rapier's own math types (glam, f32); the closed-form IK in
+//! `kinematics` works in nalgebra f64 and is converted at its call sites in `pick`.
+
+pub mod pick;
+pub mod robot;
+
+use std::path::Path;
+
+use anyhow::Context;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rapier3d::math::{Pose, Rotation, Vector};
+use rapier3d::prelude::*;
+
+use crate::objects::ObjectModel;
+use crate::render::{Drawable, Shape};
+use crate::urdf::CollisionShape;
+use robot::{groups, Arm, Gripper};
+
+/// Physics rate (Hz). 240 Hz kept thin fingers from tunnelling through small objects.
+pub const PHYSICS_HZ: f32 = 240.0;
+
+/// Where bin 1 (pick) and bin 2 (place) are centred (SPEC §2).
+pub const BIN1_CENTER: Vector = Vector::new(0.5, 0.0, 0.01);
+/// Bin 2 (place) centre.
+pub const BIN2_CENTER: Vector = Vector::new(-0.5, 0.0, 0.01);
+/// Inner floor half extents (x, y) of a tote.
+pub const BIN_INNER_HALF: [f32; 2] = [0.30, 0.40];
+/// Top surface of a tote's floor (m).
+pub const BIN_FLOOR_TOP: f32 = 0.02;
+/// Height of the tote walls' top edge (m).
+pub const BIN_WALL_TOP: f32 = 0.21;
+const BIN_WALL_THICKNESS: f32 = 0.03;
+/// Robot base position on top of the pedestal.
+pub const ROBOT_BASE: Vector = Vector::new(0.0, 0.0, 0.4);
+const PEDESTAL_RADIUS: f32 = 0.0734;
+
+/// Friction of the totes, ground and pads; combined by multiplication, so contacts take the object's μ.
+pub const ENVIRONMENT_FRICTION: f32 = 1.0;
+
+/// Settings of a workcell that users may change.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct WorkcellConfig {
+    /// Grip force per finger (N). Default 40.
+    pub grip_force: f32,
+    /// Pad friction, multiplied with the object's. Default 1.0.
+    pub pad_friction: f32,
+}
+
+impl Default for WorkcellConfig {
+    fn default() -> Self {
+        Self {
+            grip_force: 40.0,
+            pad_friction: 1.0,
+        }
+    }
+}
+
+/// An object in the scene.
+pub struct SceneObject {
+    /// The model it was built from.
+    pub model: ObjectModel,
+    /// Its rigid body.
+    pub body: RigidBodyHandle,
+    /// Its compound collider.
+    pub collider: ColliderHandle,
+    /// Mask id in rendered frames (index + 1).
+    pub id: u16,
+}
+
+/// Where an object ended up, by the rules of SPEC §8.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum ObjectLocation {
+    /// Resting inside bin 1.
+    Bin1,
+    /// Resting inside bin 2.
+    Bin2,
+    /// Anywhere else.
+    Lost,
+}
+
+/// The simulated workcell.
+pub struct Workcell {
+    pub(crate) world: PhysicsWorld,
+    pub(crate) arm: Arm,
+    pub(crate) gripper: Gripper,
+    pub(crate) objects: Vec<SceneObject>,
+    scenery: Vec<Drawable>,
+    environment: Vec<ColliderHandle>,
+    steps: u64,
+    recorder: Option<Recorder>,
+}
+
+/// Renders an extra view every few steps while the arm moves (for `--record`).
+pub struct Recorder {
+    /// The view.
+    pub camera: crate::camera::Camera,
+    /// Render every this many physics steps.
+    pub every: u64,
+    /// Frames so far.
+    pub frames: Vec<image::RgbImage>,
+}
+
+impl Workcell {
+    /// Builds the empty workcell with the robot at home; `assets` holds ur5/ur5.urdf.
+    pub fn new(assets: &Path, config: &WorkcellConfig) -> anyhow::Result<Self> {
+        let mut world = PhysicsWorld::new();
+        world.gravity = Vector::new(0.0, 0.0, -9.8);
+        let p = &mut world.integration_parameters;
+        p.dt = 1.0 / PHYSICS_HZ;
+        p.friction_model = FrictionModel::Coulomb;
+        // The default recycling distance (5 cm) lets fingers pass through small objects.
+        p.normalized_contact_recycle_distance = 0.001;
+        p.contact_softness = SpringCoefficients::new(120.0, 10.0);
+        p.num_solver_iterations = 8;
+
+        let mut scenery = Vec::new();
+        let mut environment = Vec::new();
+        let ground_color = [0.55, 0.55, 0.52];
+        let tote_color = [0.38, 0.39, 0.41];
+        let mut add_fixed_box = |world: &mut PhysicsWorld,
+                                 scenery: &mut Vec<Drawable>,
+                                 center: Vector,
+                                 half: Vector,
+                                 color: [f32; 3]| {
+            let handle = world.insert_collider(
+                ColliderBuilder::cuboid(half.x, half.y, half.z)
+                    .translation(center)
+                    .friction(ENVIRONMENT_FRICTION)
+                    .friction_combine_rule(CoefficientCombineRule::Multiply)
+                    .collision_groups(groups::environment()),
+                None,
+            );
+            environment.push(handle);
+            scenery.push(Drawable {
+                shape: Shape::Cuboid { half_extents: half },
+                pose: Pose::from_translation(center),
+                color,
+                id: 0,
+            });
+        };
+        add_fixed_box(
+            &mut world,
+            &mut scenery,
+            Vector::new(0.0, 0.0, -0.05),
+            Vector::new(2.0, 2.0, 0.05),
+            ground_color,
+        );
+        for center in [BIN1_CENTER, BIN2_CENTER] {
+            let [hx, hy] = BIN_INNER_HALF;
+            let t = BIN_WALL_THICKNESS;
+            add_fixed_box(
+                &mut world,
+                &mut scenery,
+                Vector::new(center.x, center.y, BIN_FLOOR_TOP / 2.0),
+                Vector::new(hx + t, hy + t, BIN_FLOOR_TOP / 2.0),
+                tote_color,
+            );
+            let wall_half_z = (BIN_WALL_TOP - BIN_FLOOR_TOP) / 2.0;
+            let wall_z = BIN_FLOOR_TOP + wall_half_z;
+            for sx in [-1.0, 1.0] {
+                add_fixed_box(
+                    &mut world,
+                    &mut scenery,
+                    Vector::new(center.x + sx * (hx + t / 2.0), center.y, wall_z),
+                    Vector::new(t / 2.0, hy + t, wall_half_z),
+                    tote_color,
+                );
+            }
+            for sy in [-1.0, 1.0] {
+                add_fixed_box(
+                    &mut world,
+                    &mut scenery,
+                    Vector::new(center.x, center.y + sy * (hy + t / 2.0), wall_z),
+                    Vector::new(hx, t / 2.0, wall_half_z),
+                    tote_color,
+                );
+            }
+        }
+        let pedestal_pose = Pose::from_parts(
+            Vector::new(0.0, 0.0, ROBOT_BASE.z / 2.0),
+            Rotation::from_rotation_x(std::f32::consts::FRAC_PI_2),
+        );
+        world.insert_collider(
+            ColliderBuilder::cylinder(ROBOT_BASE.z / 2.0, PEDESTAL_RADIUS)
+                .position(pedestal_pose)
+                .collision_groups(groups::pedestal()),
+            None,
+        );
+        scenery.push(Drawable {
+            shape: Shape::Cylinder {
+                radius: PEDESTAL_RADIUS,
+                half_height: ROBOT_BASE.z / 2.0,
+            },
+            pose: pedestal_pose,
+            color: [0.5, 0.5, 0.5],
+            id: 0,
+        });
+
+        let arm = Arm::load(
+            &mut world,
+            &assets.join("ur5").join("ur5.urdf"),
+            Pose::from_translation(ROBOT_BASE),
+        )?;
+        let tool0 = arm.tool0_pose(&arm.joints);
+        let gripper = Gripper::new(&mut world, tool0, config.grip_force, config.pad_friction);
+        Ok(Self {
+            world,
+            arm,
+            gripper,
+            objects: Vec::new(),
+            scenery,
+            environment,
+            steps: 0,
+            recorder: None,
+        })
+    }
+
+    /// Simulated time so far (s).
+    pub fn time(&self) -> f64 {
+        self.steps as f64 / PHYSICS_HZ as f64
+    }
+
+    /// The objects in the scene.
+    pub fn objects(&self) -> &[SceneObject] {
+        &self.objects
+    }
+
+    /// Pose of an object's body.
+    pub fn object_pose(&self, index: usize) -> Pose {
+        *self.world.bodies[self.objects[index].body].position()
+    }
+
+    /// Current arm joints.
+    pub fn joints(&self) -> crate::kinematics::Joints {
+        self.arm.joints
+    }
+
+    /// World pose of tool0 for the current joints (URDF chain).
+    pub fn tool0_pose(&self) -> Pose {
+        self.arm.tool0_pose(&self.arm.joints)
+    }
+
+    /// Starts recording frames of `camera` every `every` steps.
+    pub fn start_recording(&mut self, camera: crate::camera::Camera, every: u64) {
+        self.recorder = Some(Recorder {
+            camera,
+            every: every.max(1),
+            frames: Vec::new(),
+        });
+    }
+
+    /// Stops recording and returns the frames.
+    pub fn take_recording(&mut self) -> Vec<image::RgbImage> {
+        self.recorder.take().map(|r| r.frames).unwrap_or_default()
+    }
+
+    /// Advances physics by one step.
+    pub(crate) fn step(&mut self) {
+        self.world.step();
+        self.steps += 1;
+        let due = self
+            .recorder
+            .as_ref()
+            .is_some_and(|r| self.steps % r.every == 0);
+        if due {
+            let scene = self.drawables();
+            if let Some(r) = self.recorder.as_mut() {
+                let frame = crate::render::render(&r.camera, &scene);
+                r.frames.push(frame.to_rgb_image());
+            }
+        }
+    }
+
+    /// Adds an object at `pose`, at rest.
+    pub fn add_object(&mut self, model: &ObjectModel, pose: Pose) -> anyhow::Result<usize> {
+        let shapes = model
+            .collisions
+            .iter()
+            .map(|c| Ok((c.pose, shared_shape(&c.shape)?)))
+            .collect::<anyhow::Result<Vec<_>>>()
+            .with_context(|| format!("building collision shape of {}", model.name))?;
+        let body = self.world.insert_body(
+            RigidBodyBuilder::dynamic()
+                .pose(pose)
+                .ccd_enabled(true)
+                .angular_damping(0.05),
+        );
+        let collider = self.world.insert_collider(
+            ColliderBuilder::new(SharedShape::compound(shapes))
+                .mass(model.mass)
+                .friction(model.friction)
+                .friction_combine_rule(CoefficientCombineRule::Multiply)
+                .restitution(0.0)
+                .collision_groups(groups::object()),
+            Some(body),
+        );
+        let id = self.objects.len() as u16 + 1;
+        self.objects.push(SceneObject {
+            model: model.clone(),
+            body,
+            collider,
+            id,
+        });
+        Ok(self.objects.len() - 1)
+    }
+
+    /// Drops objects one after another into bin 1 from seeded random poses (SPEC §2), each
+    /// settling before the next falls, with the parked arm's colliders switched off.
+    pub fn drop_objects(&mut self, models: &[ObjectModel], seed: u64) -> anyhow::Result<()> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        self.set_robot_collisions(false);
+        for model in models {
+            let position = Vector::new(
+                rng.random_range(0.38..=0.62),
+                rng.random_range(-0.22..=0.22),
+                rng.random_range(0.2..=0.7),
+            );
+            let pi = std::f32::consts::PI;
+            let rotation = Rotation::from_euler(
+                rapier3d::glamx::EulerRot::ZYX,
+                rng.random_range(-pi..=pi),
+                rng.random_range(-pi..=pi),
+                rng.random_range(-pi..=pi),
+            );
+            let index = self.add_object(model, Pose::from_parts(position, rotation))?;
+            let _ = index;
+            self.settle(4.0);
+        }
+        self.set_robot_collisions(true);
+        Ok(())
+    }
+
+    /// Steps until every object is at rest (or `max_seconds` pass); returns the seconds simulated.
+    pub fn settle(&mut self, max_seconds: f32) -> f32 {
+        let max_steps = (max_seconds * PHYSICS_HZ) as u32;
+        let mut calm = 0;
+        let mut steps = 0;
+        while steps < max_steps {
+            self.hold_arm();
+            self.step();
+            steps += 1;
+            let moving = self.objects.iter().any(|o| {
+                let b = &self.world.bodies[o.body];
+                !b.is_sleeping() && (b.linvel().length() > 0.005 || b.angvel().length() > 0.05)
+            });
+            calm = if moving { 0 } else { calm + 1 };
+            if calm >= 24 {
+                break;
+            }
+        }
+        steps as f32 / PHYSICS_HZ
+    }
+
+    /// Keeps the arm and palm where they are for the next step.
+    pub(crate) fn hold_arm(&mut self) {
+        let q = self.arm.joints;
+        self.drive_arm(q);
+    }
+
+    /// Schedules arm links and palm to reach `q` at the end of the next step.
+    pub(crate) fn drive_arm(&mut self, q: crate::kinematics::Joints) {
+        self.arm.drive(&mut self.world, q);
+        let tool0 = self.arm.tool0_pose(&q);
+        self.gripper.drive(&mut self.world, tool0);
+    }
+
+    fn set_robot_collisions(&mut self, enabled: bool) {
+        for &h in &self.arm.colliders {
+            if let Some(c) = self.world.colliders.get_mut(h) {
+                c.set_collision_groups(if enabled {
+                    groups::arm()
+                } else {
+                    groups::none()
+                });
+            }
+        }
+        self.gripper.set_collisions(&mut self.world, enabled);
+    }
+
+    /// Everything drawable, in world coordinates; object ids are index + 1, the rest 0.
+    pub fn drawables(&self) -> Vec<Drawable> {
+        let mut out = self.scenery.clone();
+        for (pose, visual) in self.arm.visuals() {
+            out.push(Drawable {
+                shape: visual.shape.clone(),
+                pose: pose * visual.pose,
+                color: visual.color,
+                id: 0,
+            });
+        }
+        for (pose, half, color) in self.gripper.drawables(&self.world) {
+            out.push(Drawable {
+                shape: Shape::Cuboid { half_extents: half },
+                pose,
+                color,
+                id: 0,
+            });
+        }
+        for object in &self.objects {
+            let pose = *self.world.bodies[object.body].position();
+            for visual in &object.model.visuals {
+                out.push(Drawable {
+                    shape: visual.shape.clone(),
+                    pose: pose * visual.pose,
+                    color: visual.color,
+                    id: object.id,
+                });
+            }
+        }
+        out
+    }
+
+    /// Renders the top-down camera (SPEC §3).
+    pub fn capture(&self) -> crate::render::Frame {
+        crate::render::render(&crate::camera::Camera::top_down(), &self.drawables())
+    }
+
+    /// Where an object is, by its centre: inside a tote's inner volume, or lost.
+    pub fn locate(&self, index: usize) -> ObjectLocation {
+        let p = self.object_pose(index).translation;
+        let inside = |c: Vector| {
+            (p.x - c.x).abs() <= BIN_INNER_HALF[0]
+                && (p.y - c.y).abs() <= BIN_INNER_HALF[1]
+                && p.z >= BIN_FLOOR_TOP - 0.01
+                && p.z <= BIN_WALL_TOP + 0.3
+        };
+        if inside(BIN1_CENTER) {
+            ObjectLocation::Bin1
+        } else if inside(BIN2_CENTER) {
+            ObjectLocation::Bin2
+        } else {
+            ObjectLocation::Lost
+        }
+    }
+
+    /// True when a collider of the environment (ground, totes) touches `collider`.
+    pub(crate) fn touches_environment(&self, collider: ColliderHandle, tolerance: f32) -> bool {
+        self.environment
+            .iter()
+            .any(|&env| penetration(&self.world, env, collider) > tolerance)
+    }
+
+    /// Largest normal force (N) between two colliders during the last step.
+    pub(crate) fn contact_force(&self, a: ColliderHandle, b: ColliderHandle) -> f32 {
+        self.world
+            .contact_pair(a, b)
+            .map_or(0.0, |pair| pair.total_impulse_magnitude() * PHYSICS_HZ)
+    }
+}
+
+/// How deep two colliders overlap (m); negative or zero when apart.
+pub(crate) fn penetration(world: &PhysicsWorld, a: ColliderHandle, b: ColliderHandle) -> f32 {
+    let Some(pair) = world.contact_pair(a, b) else {
+        return 0.0;
+    };
+    pair.manifolds()
+        .iter()
+        .flat_map(|m| m.points.iter())
+        .map(|p| -p.dist)
+        .fold(0.0, f32::max)
+}
+
+/// Whether two colliders are in contact (within `gap` metres).
+pub(crate) fn in_contact(world: &PhysicsWorld, a: ColliderHandle, b: ColliderHandle, gap: f32) -> bool {
+    world.contact_pair(a, b).is_some_and(|pair| {
+        pair.manifolds()
+            .iter()
+            .flat_map(|m| m.points.iter())
+            .any(|p| p.dist <= gap)
+    })
+}
+
+fn shared_shape(shape: &CollisionShape) -> anyhow::Result<SharedShape> {
+    Ok(match shape {
+        CollisionShape::Cuboid { half_extents: h } => SharedShape::cuboid(h.x, h.y, h.z),
+        CollisionShape::Sphere { radius } => SharedShape::ball(*radius),
+        CollisionShape::Cylinder {
+            radius,
+            half_height,
+        } => SharedShape::cylinder(*half_height, *radius),
+        CollisionShape::Capsule {
+            radius,
+            half_height,
+        } => SharedShape::capsule_y(*half_height, *radius),
+        CollisionShape::ConvexHull { points } => SharedShape::convex_hull(points)
+            .context("a collision mesh piece is degenerate (flat or fewer than 4 points)")?,
+    })
+}

@@ -1,0 +1,447 @@
+//! The pick sequence (SPEC §4): open, approach, straight descent, close, lift, home, check, and place in bin 2.
+//!
+//! Every motion is simulated step by step. Collisions with the totes or pushing hard on objects
+//! stop the arm, and IK failures end the attempt, each as a typed outcome rather than an error.
+
+use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
+use rapier3d::math::{Pose, Rotation, Vector};
+
+use super::robot::gripper_geometry::TCP_OFFSET;
+use super::{in_contact, ObjectLocation, Workcell, PHYSICS_HZ};
+use crate::grasp::WorldGrasp;
+use crate::kinematics::{IkError, JointTrajectory, Joints, TrapezoidProfile, Ur5, HOME_JOINTS, PLACE_JOINTS};
+
+/// Joint-space speed limit of the trapezoidal moves (rad/s).
+pub const JOINT_SPEED: f64 = 3.0;
+/// Joint-space acceleration limit (rad/s²).
+pub const JOINT_ACCELERATION: f64 = 6.0;
+/// Cartesian speed of the vertical descent and lift (m/s).
+pub const LINE_SPEED: f64 = 0.5;
+/// Cartesian acceleration of the vertical descent and lift (m/s²).
+pub const LINE_ACCELERATION: f64 = 2.0;
+/// Height of the approach point above the target, and of the lift (m).
+pub const APPROACH_HEIGHT: f32 = 0.3;
+/// Height an object must rise for a grasp to count (m).
+pub const LIFT_SUCCESS_HEIGHT: f32 = 0.2;
+/// A force this large between the arm (or fingers) and an object stops the arm (N).
+pub const OBJECT_FORCE_LIMIT: f32 = 60.0;
+/// Penetration into the totes or ground that counts as a collision (m).
+pub const ENVIRONMENT_PENETRATION: f32 = 0.002;
+/// Below this opening the fingers count as fully closed (m).
+pub const CLOSED_OPENING: f32 = 0.004;
+/// Distance within which a pad counts as touching an object (m).
+const TOUCH_GAP: f32 = 0.002;
+
+/// Why an attempt ended the way it did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PickReason {
+    /// Lifted, carried home and placed.
+    Success,
+    /// The fingers closed on nothing.
+    EmptyHand,
+    /// Something was touched but it did not stay between the pads up to home.
+    Slipped,
+    /// The arm or hand ran into the totes, the ground, or pressed hard on an object.
+    Collision,
+    /// No IK solution along the path.
+    IkUnreachable,
+    /// The planner found no feasible grasp (reported by planners, not by execution).
+    Ungraspable,
+}
+
+impl PickReason {
+    /// The snake_case name used in reports.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            PickReason::Success => "success",
+            PickReason::EmptyHand => "empty_hand",
+            PickReason::Slipped => "slipped",
+            PickReason::Collision => "collision",
+            PickReason::IkUnreachable => "ik_unreachable",
+            PickReason::Ungraspable => "ungraspable",
+        }
+    }
+}
+
+/// Result of one pick attempt.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PickOutcome {
+    /// True when an object was lifted, carried home and released over bin 2.
+    pub success: bool,
+    /// The reason, `success` included.
+    pub reason: PickReason,
+    /// Human-readable detail (what collided, how far the object rose...).
+    pub detail: String,
+    /// Name of the object that was held, when any was.
+    pub object: Option<String>,
+    /// Where the held object came to rest after placing.
+    pub placed: Option<ObjectLocation>,
+    /// Simulated seconds the attempt took.
+    pub sim_seconds: f64,
+}
+
+enum Stop {
+    Collision(String),
+    Ik(IkError),
+}
+
+/// What may not be touched during a motion.
+#[derive(Clone, Copy)]
+struct Guard {
+    /// Check pushing forces on objects (off while carrying one).
+    objects: bool,
+}
+
+impl Workcell {
+    /// Executes a full pick attempt for a world grasp; on success the object is placed in bin 2.
+    pub fn pick(&mut self, grasp: &WorldGrasp) -> PickOutcome {
+        let start = self.time();
+        let mut outcome = self.pick_inner(grasp);
+        outcome.sim_seconds = self.time() - start;
+        outcome
+    }
+
+    fn pick_inner(&mut self, grasp: &WorldGrasp) -> PickOutcome {
+        let fail = |reason, detail: String| PickOutcome {
+            success: false,
+            reason,
+            detail,
+            object: None,
+            placed: None,
+            sim_seconds: 0.0,
+        };
+        let ur5 = Ur5::new(to_isometry(&Pose::from_translation(super::ROBOT_BASE)));
+        let grasp_tool0 = |tcp: Vector, closing: Vector| {
+            // Tool z points down; fingers slide along tool y = the closing direction.
+            let z = Vector::new(0.0, 0.0, -1.0);
+            let y = closing;
+            let x = y.cross(z);
+            let rotation = Rotation::from_mat3(&rapier3d::glamx::Mat3::from_cols(x, y, z));
+            Pose::from_parts(tcp + Vector::new(0.0, 0.0, TCP_OFFSET), rotation)
+        };
+        let above = grasp.tcp + Vector::new(0.0, 0.0, APPROACH_HEIGHT);
+        // The jaw is symmetric: take whichever of ±closing needs less wrist travel.
+        let current = self.arm.joints;
+        let candidates = [grasp.closing, -grasp.closing].map(|c| {
+            let pose = grasp_tool0(above, c);
+            ur5.inverse(&to_isometry(&pose), &current)
+                .map(|q| (q, c, joint_distance(&q, &current)))
+        });
+        let (approach_q, closing) = match candidates {
+            [Ok(a), Ok(b)] => {
+                if a.2 <= b.2 {
+                    (a.0, a.1)
+                } else {
+                    (b.0, b.1)
+                }
+            }
+            [Ok(a), Err(_)] | [Err(_), Ok(a)] => (a.0, a.1),
+            [Err(e), Err(_)] => return fail(PickReason::IkUnreachable, e.to_string()),
+        };
+
+        let heights_before: Vec<f32> = (0..self.objects.len())
+            .map(|i| self.object_pose(i).translation.z)
+            .collect();
+        let guard = Guard { objects: true };
+        self.gripper.open(&mut self.world);
+        self.wait_for_fingers(0.6);
+        if let Err(stop) = self.move_joints(approach_q, guard) {
+            return self.abort(stop);
+        }
+        if let Err(stop) = self.move_line(&ur5, grasp_tool0(grasp.tcp, closing), guard) {
+            return self.abort(stop);
+        }
+        self.gripper.close(&mut self.world);
+        self.wait_for_fingers(1.0);
+        let carry = Guard { objects: false };
+        if let Err(stop) = self.move_line(&ur5, grasp_tool0(above, closing), carry) {
+            return self.abort(stop);
+        }
+        if let Err(failure) = self.check_held(&heights_before, "after the lift") {
+            self.recover();
+            return failure;
+        }
+        if let Err(stop) = self.move_joints(HOME_JOINTS, carry) {
+            return self.abort(stop);
+        }
+        let held = match self.check_held(&heights_before, "at home") {
+            Ok(held) => held,
+            Err(failure) => {
+                self.recover();
+                return failure;
+            }
+        };
+        // Place: carry to bin 2, release, and come back.
+        // A collision on the way to bin 2 stops the arm; the object is released wherever it is,
+        // and `placed` reports where it came to rest.
+        let _ = self.move_joints(PLACE_JOINTS, carry);
+        self.gripper.open(&mut self.world);
+        self.wait_for_fingers(0.6);
+        self.hold_for(0.5);
+        self.recover_home();
+        self.settle(2.0);
+        PickOutcome {
+            success: true,
+            reason: PickReason::Success,
+            detail: format!(
+                "lifted {} by {:.3} m",
+                self.objects[held].model.name,
+                self.lift_of(held, &heights_before)
+            ),
+            object: Some(self.objects[held].model.name.clone()),
+            placed: Some(self.locate(held)),
+            sim_seconds: 0.0,
+        }
+    }
+
+    fn lift_of(&self, index: usize, heights_before: &[f32]) -> f32 {
+        self.object_pose(index).translation.z - heights_before[index]
+    }
+
+    /// Which object is held between both pads, risen by the success height; or why none is.
+    fn check_held(&self, heights_before: &[f32], when: &str) -> Result<usize, PickOutcome> {
+        let opening = self.gripper.opening(&self.world);
+        let touching: Vec<usize> = (0..self.objects.len())
+            .filter(|&i| {
+                let c = self.objects[i].collider;
+                self.gripper
+                    .pads
+                    .iter()
+                    .any(|&pad| in_contact(&self.world, pad, c, TOUCH_GAP))
+            })
+            .collect();
+        let held = touching.iter().copied().find(|&i| {
+            let c = self.objects[i].collider;
+            self.gripper
+                .pads
+                .iter()
+                .all(|&pad| in_contact(&self.world, pad, c, TOUCH_GAP))
+                && self.lift_of(i, heights_before) >= LIFT_SUCCESS_HEIGHT
+        });
+        match held {
+            Some(i) if opening > CLOSED_OPENING => Ok(i),
+            _ => {
+                let (reason, detail) = if touching.is_empty() && opening <= CLOSED_OPENING {
+                    (
+                        PickReason::EmptyHand,
+                        format!("fingers closed on nothing {when}"),
+                    )
+                } else {
+                    let lifted = touching
+                        .first()
+                        .map(|&i| self.lift_of(i, heights_before))
+                        .unwrap_or(0.0);
+                    (
+                        PickReason::Slipped,
+                        format!(
+                            "object not held {when} (opening {:.3} m, object rose {:.3} m)",
+                            opening, lifted
+                        ),
+                    )
+                };
+                Err(PickOutcome {
+                    success: false,
+                    reason,
+                    detail,
+                    object: touching.first().map(|&i| self.objects[i].model.name.clone()),
+                    placed: None,
+                    sim_seconds: 0.0,
+                })
+            }
+        }
+    }
+
+    fn abort(&mut self, stop: Stop) -> PickOutcome {
+        let (reason, detail) = match stop {
+            Stop::Collision(what) => (PickReason::Collision, what),
+            Stop::Ik(e) => (PickReason::IkUnreachable, e.to_string()),
+        };
+        self.recover();
+        PickOutcome {
+            success: false,
+            reason,
+            detail,
+            object: None,
+            placed: None,
+            sim_seconds: 0.0,
+        }
+    }
+
+    /// After a failed attempt: open, back straight up, and return home, without collision stops.
+    fn recover(&mut self) {
+        self.gripper.open(&mut self.world);
+        self.wait_for_fingers(0.6);
+        let ur5 = Ur5::new(to_isometry(&Pose::from_translation(super::ROBOT_BASE)));
+        let mut up = self.tool0_pose();
+        up.translation.z = up.translation.z.max(0.25 + TCP_OFFSET) + 0.1;
+        let _ = self.move_line_unchecked(&ur5, up);
+        self.recover_home();
+        self.settle(2.0);
+    }
+
+    fn recover_home(&mut self) {
+        let trajectory =
+            JointTrajectory::new(self.arm.joints, HOME_JOINTS, JOINT_SPEED, JOINT_ACCELERATION);
+        self.follow(|t| Some(trajectory.sample(t)), trajectory.duration(), None)
+            .ok();
+    }
+
+    fn hold_for(&mut self, seconds: f32) {
+        for _ in 0..(seconds * PHYSICS_HZ) as u32 {
+            self.hold_arm();
+            self.step();
+        }
+    }
+
+    /// Holds the arm while the finger motors run, until they stop or `max_seconds` pass.
+    fn wait_for_fingers(&mut self, max_seconds: f32) {
+        let max_steps = (max_seconds * PHYSICS_HZ) as u32;
+        let min_steps = (0.08 * PHYSICS_HZ) as u32;
+        let mut still = 0;
+        for i in 0..max_steps {
+            self.hold_arm();
+            self.step();
+            still = if self.gripper.finger_speed(&self.world) < 0.002 {
+                still + 1
+            } else {
+                0
+            };
+            if i >= min_steps && still >= 6 {
+                break;
+            }
+        }
+    }
+
+    fn move_joints(&mut self, target: Joints, guard: Guard) -> Result<(), Stop> {
+        let trajectory =
+            JointTrajectory::new(self.arm.joints, target, JOINT_SPEED, JOINT_ACCELERATION);
+        self.follow(|t| Some(trajectory.sample(t)), trajectory.duration(), Some(guard))
+            .map_err(|e| e.unwrap_or_else(|| unreachable!("joint moves have no ik")))
+    }
+
+    /// A straight line of tool0 from where it is to `target` (same orientation), IK at every step.
+    fn move_line(&mut self, ur5: &Ur5, target: Pose, guard: Guard) -> Result<(), Stop> {
+        self.line(ur5, target, Some(guard))
+    }
+
+    fn move_line_unchecked(&mut self, ur5: &Ur5, target: Pose) -> Result<(), Stop> {
+        self.line(ur5, target, None)
+    }
+
+    fn line(&mut self, ur5: &Ur5, target: Pose, guard: Option<Guard>) -> Result<(), Stop> {
+        let start = self.tool0_pose();
+        let from = start.translation;
+        let length = (target.translation - from).length() as f64;
+        let profile = TrapezoidProfile::new(length, LINE_SPEED, LINE_ACCELERATION);
+        let mut near = self.arm.joints;
+        let mut ik_error = None;
+        let result = self.follow(
+            |t| {
+                let s = if length > 0.0 {
+                    (profile.position(t) / length) as f32
+                } else {
+                    1.0
+                };
+                let pose = Pose::from_parts(from.lerp(target.translation, s), target.rotation);
+                match ur5.inverse(&to_isometry(&pose), &near) {
+                    Ok(q) => {
+                        near = q;
+                        Some(q)
+                    }
+                    Err(e) => {
+                        ik_error = Some(e);
+                        None
+                    }
+                }
+            },
+            profile.duration(),
+            guard,
+        );
+        match (result, ik_error) {
+            (Err(_), Some(e)) => Err(Stop::Ik(e)),
+            (Err(Some(stop)), None) => Err(stop),
+            (Err(None), None) => unreachable!("a stop without a cause"),
+            (Ok(()), _) => Ok(()),
+        }
+    }
+
+    /// Steps physics along `path(t)` for `duration` seconds. `Err(None)` when `path` gives up
+    /// (IK failure), `Err(Some(..))` when a guarded collision stops the arm where it is.
+    fn follow(
+        &mut self,
+        mut path: impl FnMut(f64) -> Option<Joints>,
+        duration: f64,
+        guard: Option<Guard>,
+    ) -> Result<(), Option<Stop>> {
+        let dt = 1.0 / PHYSICS_HZ as f64;
+        let steps = (duration / dt).ceil() as u64;
+        for i in 1..=steps {
+            let t = (i as f64 * dt).min(duration);
+            let q = path(t).ok_or(None)?;
+            let previous = self.arm.joints;
+            self.drive_arm(q);
+            self.step();
+            if let Some(guard) = guard {
+                if let Some(what) = self.collision(guard) {
+                    // The arm stops: it stays where it was before this step.
+                    self.arm.joints = previous;
+                    self.hold_arm();
+                    self.step();
+                    return Err(Some(Stop::Collision(what)));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// The first guarded contact, described, if any.
+    fn collision(&self, guard: Guard) -> Option<String> {
+        for &c in self.arm.colliders.iter().chain([&self.gripper.palm_collider]) {
+            if self.touches_environment(c, ENVIRONMENT_PENETRATION) {
+                return Some("the arm hit the bin or the ground".into());
+            }
+        }
+        for &c in self.gripper.finger_colliders.iter().flatten() {
+            if self.touches_environment(c, ENVIRONMENT_PENETRATION) {
+                return Some("a finger hit the bin or the ground".into());
+            }
+        }
+        if guard.objects {
+            let hand = self
+                .arm
+                .colliders
+                .iter()
+                .chain([&self.gripper.palm_collider])
+                .chain(self.gripper.finger_colliders.iter().flatten());
+            for &c in hand {
+                for object in &self.objects {
+                    let force = self.contact_force(c, object.collider);
+                    if force > OBJECT_FORCE_LIMIT {
+                        return Some(format!(
+                            "the hand pressed on {} with {force:.0} N",
+                            object.model.name
+                        ));
+                    }
+                }
+            }
+        }
+        None
+    }
+}
+
+fn joint_distance(a: &Joints, b: &Joints) -> f64 {
+    a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt()
+}
+
+/// rapier pose (f32, glam) → nalgebra isometry (f64) for the IK.
+pub(crate) fn to_isometry(pose: &Pose) -> Isometry3<f64> {
+    let t = pose.translation;
+    let q = pose.rotation;
+    Isometry3::from_parts(
+        Translation3::new(t.x as f64, t.y as f64, t.z as f64),
+        UnitQuaternion::from_quaternion(Quaternion::new(
+            q.w as f64, q.x as f64, q.y as f64, q.z as f64,
+        )),
+    )
+}

@@ -1,0 +1,437 @@
+//! The UR5 loaded from its URDF (rapier3d-urdf for colliders, urdf-rs for the chain), driven as kinematic links, plus the parallel-jaw gripper.
+//!
+//! The arm is position-controlled: every physics step each link body gets its next kinematic pose
+//! from forward kinematics of the URDF chain, so it sweeps through the scene and its contacts are
+//! real. The fingers are dynamic bodies on prismatic joints with force-bounded motors, so a grip
+//! holds by friction alone.
+
+use std::path::Path;
+
+use anyhow::{bail, Context};
+use rapier3d::math::{Pose, Rotation, Vector};
+use rapier3d::prelude::*;
+use rapier3d_urdf::{UrdfLoaderOptions, UrdfRobot};
+
+use crate::kinematics::Joints;
+use crate::urdf::{rpy_rotation, UrdfFile, Visual};
+
+/// Collision groups: which families of colliders may touch.
+pub(crate) mod groups {
+    use rapier3d::prelude::{Group, InteractionGroups, InteractionTestMode};
+
+    pub const ENVIRONMENT: Group = Group::GROUP_1;
+    pub const PEDESTAL: Group = Group::GROUP_2;
+    pub const ARM: Group = Group::GROUP_3;
+    pub const FINGER: Group = Group::GROUP_4;
+    pub const OBJECT: Group = Group::GROUP_5;
+
+    fn groups(member: Group, filter: Group) -> InteractionGroups {
+        InteractionGroups::new(member, filter, InteractionTestMode::And)
+    }
+    pub fn environment() -> InteractionGroups {
+        groups(ENVIRONMENT, ARM.union(FINGER).union(OBJECT))
+    }
+    /// The arm stands on its pedestal, so only objects may touch it.
+    pub fn pedestal() -> InteractionGroups {
+        groups(PEDESTAL, OBJECT)
+    }
+    pub fn arm() -> InteractionGroups {
+        groups(ARM, ENVIRONMENT.union(OBJECT))
+    }
+    pub fn finger() -> InteractionGroups {
+        groups(FINGER, ENVIRONMENT.union(OBJECT))
+    }
+    pub fn object() -> InteractionGroups {
+        groups(
+            OBJECT,
+            ENVIRONMENT
+                .union(PEDESTAL)
+                .union(ARM)
+                .union(FINGER)
+                .union(OBJECT),
+        )
+    }
+    /// Parked: the arm and hand touch nothing while objects are dropped past them.
+    pub fn none() -> InteractionGroups {
+        groups(Group::NONE, Group::NONE)
+    }
+}
+
+/// Gripper dimensions (Robotiq 2F-85 size) in the tool0 frame, whose z axis points out of the flange.
+pub mod gripper_geometry {
+    /// Maximum distance between the pads' inner faces (m).
+    pub const MAX_OPENING: f32 = 0.085;
+    /// Distance from tool0 to the TCP along the tool axis (m).
+    pub const TCP_OFFSET: f32 = 0.15;
+    /// Pad width across the closing direction (m).
+    pub const PAD_WIDTH: f32 = 0.022;
+    /// Pad height along the tool axis (m).
+    pub const PAD_HEIGHT: f32 = 0.035;
+    /// Pad thickness along the closing direction (m).
+    pub const PAD_THICKNESS: f32 = 0.010;
+    /// Palm (coupling + body) length below tool0 (m).
+    pub const PALM_LENGTH: f32 = 0.060;
+    /// Palm half extents across (x) and along (y) the closing direction (m).
+    pub const PALM_HALF_X: f32 = 0.035;
+    pub const PALM_HALF_Y: f32 = 0.062;
+    /// How far the upper finger link sits back from the pad's inner face (m).
+    pub const LINK_SETBACK: f32 = 0.006;
+    /// Each finger's mass (kg); lighter fingers made the joint solve unstable.
+    pub const FINGER_MASS: f32 = 0.3;
+}
+
+/// One link of the URDF chain, in topological order.
+#[derive(Debug, Clone)]
+struct ChainLink {
+    parent: Option<usize>,
+    origin: Pose,
+    axis: Vector,
+    /// Index into the joint vector for revolute joints; None for fixed joints and the root.
+    joint: Option<usize>,
+    body: Option<RigidBodyHandle>,
+    visuals: Vec<Visual>,
+}
+
+/// The arm: its URDF chain and the kinematic bodies that follow it.
+pub(crate) struct Arm {
+    base: Pose,
+    chain: Vec<ChainLink>,
+    tool0: usize,
+    pub colliders: Vec<ColliderHandle>,
+    pub joints: Joints,
+}
+
+/// Names of the six revolute joints, in joint-vector order.
+pub const JOINT_NAMES: [&str; 6] = [
+    "shoulder_pan_joint",
+    "shoulder_lift_joint",
+    "elbow_joint",
+    "wrist_1_joint",
+    "wrist_2_joint",
+    "wrist_3_joint",
+];
+
+impl Arm {
+    /// Loads the URDF: rapier3d-urdf builds the colliders, urdf-rs gives the chain and visuals.
+    pub fn load(world: &mut PhysicsWorld, urdf_path: &Path, base: Pose) -> anyhow::Result<Self> {
+        let file = UrdfFile::read(urdf_path)?;
+        let options = UrdfLoaderOptions {
+            make_roots_fixed: true,
+            apply_imported_mass_props: false,
+            squeeze_empty_fixed_links: false,
+            ..Default::default()
+        };
+        let (urdf_robot, robot) = UrdfRobot::from_file(urdf_path, options, None)
+            .with_context(|| format!("loading robot {}", urdf_path.display()))?;
+
+        let links = &robot.links;
+        let find_link = |name: &str| links.iter().position(|l| l.name == name);
+        // Topological order from the root (the one link that is nobody's child).
+        let root = links
+            .iter()
+            .position(|l| robot.joints.iter().all(|j| j.child.link != l.name))
+            .context("robot urdf has no root link")?;
+        let mut order = vec![root];
+        let mut chain = vec![ChainLink {
+            parent: None,
+            origin: Pose::IDENTITY,
+            axis: Vector::Z,
+            joint: None,
+            body: None,
+            visuals: file.link_geometry(root)?.visuals,
+        }];
+        let mut cursor = 0;
+        while cursor < order.len() {
+            let parent_name = &links[order[cursor]].name;
+            for joint in robot.joints.iter().filter(|j| &j.parent.link == parent_name) {
+                let child = find_link(&joint.child.link)
+                    .with_context(|| format!("joint {} names unknown link", joint.name))?;
+                let [x, y, z] = joint.origin.xyz.0;
+                let [r, p, yw] = joint.origin.rpy.0;
+                let axis = joint.axis.xyz.0;
+                let joint_index = match joint.joint_type {
+                    urdf_rs::JointType::Fixed => None,
+                    urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => Some(
+                        JOINT_NAMES
+                            .iter()
+                            .position(|n| *n == joint.name)
+                            .with_context(|| format!("unexpected ur5 joint '{}'", joint.name))?,
+                    ),
+                    ref other => bail!("joint {} has unsupported type {other:?}", joint.name),
+                };
+                chain.push(ChainLink {
+                    parent: Some(cursor),
+                    origin: Pose::from_parts(
+                        Vector::new(x as f32, y as f32, z as f32),
+                        rpy_rotation(r, p, yw),
+                    ),
+                    axis: Vector::new(axis[0] as f32, axis[1] as f32, axis[2] as f32).normalize(),
+                    joint: joint_index,
+                    body: None,
+                    visuals: file.link_geometry(child)?.visuals,
+                });
+                order.push(child);
+            }
+            cursor += 1;
+        }
+        let tool0 = order
+            .iter()
+            .position(|&l| links[l].name == "tool0")
+            .context("robot urdf has no tool0 link")?;
+
+        let mut colliders = Vec::new();
+        for link in urdf_robot.links {
+            let Some(slot) = order.iter().position(|&l| l == link.urdf_link_index) else {
+                continue;
+            };
+            let mut body = link.body;
+            body.set_body_type(RigidBodyType::KinematicPositionBased, true);
+            let handle = world.insert_body(body);
+            for c in link.colliders {
+                let mut collider = c.collider;
+                collider.set_collision_groups(groups::arm());
+                collider.set_active_collision_types(
+                    ActiveCollisionTypes::default() | ActiveCollisionTypes::KINEMATIC_FIXED,
+                );
+                colliders.push(world.insert_collider(collider, Some(handle)));
+            }
+            chain[slot].body = Some(handle);
+        }
+        let mut arm = Self {
+            base,
+            chain,
+            tool0,
+            colliders,
+            joints: crate::kinematics::HOME_JOINTS,
+        };
+        arm.teleport(world, crate::kinematics::HOME_JOINTS);
+        Ok(arm)
+    }
+
+    /// World pose of every chain link for joint values `q`.
+    fn link_poses(&self, q: &Joints) -> Vec<Pose> {
+        let mut poses: Vec<Pose> = Vec::with_capacity(self.chain.len());
+        for link in &self.chain {
+            let pose = match link.parent {
+                None => self.base,
+                Some(p) => {
+                    let turn = link.joint.map_or(Rotation::IDENTITY, |j| {
+                        Rotation::from_axis_angle(link.axis, q[j] as f32)
+                    });
+                    poses[p] * link.origin * Pose::from_rotation(turn)
+                }
+            };
+            poses.push(pose);
+        }
+        poses
+    }
+
+    /// World pose of tool0 from the URDF chain.
+    pub fn tool0_pose(&self, q: &Joints) -> Pose {
+        self.link_poses(q)[self.tool0]
+    }
+
+    /// Moves every link body to `q` at once; only for initial placement.
+    pub fn teleport(&mut self, world: &mut PhysicsWorld, q: Joints) {
+        for (link, pose) in self.chain.iter().zip(self.link_poses(&q)) {
+            if let Some(body) = link.body.and_then(|h| world.bodies.get_mut(h)) {
+                body.set_position(pose, true);
+            }
+        }
+        self.joints = q;
+    }
+
+    /// Schedules the kinematic bodies to reach `q` at the end of the next step.
+    pub fn drive(&mut self, world: &mut PhysicsWorld, q: Joints) {
+        for (link, pose) in self.chain.iter().zip(self.link_poses(&q)) {
+            if let Some(body) = link.body.and_then(|h| world.bodies.get_mut(h)) {
+                body.set_next_kinematic_position(pose);
+            }
+        }
+        self.joints = q;
+    }
+
+    /// Drawable pieces in world coordinates for the current joints.
+    pub fn visuals(&self) -> impl Iterator<Item = (Pose, &Visual)> + '_ {
+        let poses = self.link_poses(&self.joints);
+        self.chain
+            .iter()
+            .zip(poses)
+            .flat_map(|(link, pose)| link.visuals.iter().map(move |v| (pose, v)))
+    }
+}
+
+/// The parallel-jaw gripper: a kinematic palm at tool0 and two motorised fingers.
+pub(crate) struct Gripper {
+    pub palm: RigidBodyHandle,
+    pub palm_collider: ColliderHandle,
+    pub fingers: [RigidBodyHandle; 2],
+    pub finger_colliders: [Vec<ColliderHandle>; 2],
+    pub pads: [ColliderHandle; 2],
+    joints: [ImpulseJointHandle; 2],
+    force: f32,
+}
+
+/// Closing and opening speed of each finger (m/s).
+const FINGER_SPEED: f32 = 0.15;
+
+impl Gripper {
+    /// Builds the gripper open at `tool0`, with `force` newtons per finger.
+    pub fn new(world: &mut PhysicsWorld, tool0: Pose, force: f32, pad_friction: f32) -> Self {
+        use gripper_geometry::*;
+        let palm = world.insert_body(RigidBodyBuilder::kinematic_position_based().pose(tool0));
+        let palm_collider = world.insert_collider(
+            ColliderBuilder::cuboid(PALM_HALF_X, PALM_HALF_Y, PALM_LENGTH / 2.0)
+                .translation(Vector::new(0.0, 0.0, PALM_LENGTH / 2.0))
+                .collision_groups(groups::arm())
+                .active_collision_types(
+                    ActiveCollisionTypes::default() | ActiveCollisionTypes::KINEMATIC_FIXED,
+                ),
+            Some(palm),
+        );
+        let mut fingers = Vec::new();
+        let mut finger_colliders = Vec::new();
+        let mut pads = Vec::new();
+        let mut joints = Vec::new();
+        for side in [1.0f32, -1.0] {
+            // Finger frame: origin on the pad's inner face, on the closing axis; the finger
+            // extends outward (away from the other finger) along `side`·y.
+            let half_open = MAX_OPENING / 2.0;
+            let finger = world.insert_body(
+                RigidBodyBuilder::dynamic()
+                    .pose(tool0 * Pose::from_translation(Vector::new(0.0, side * half_open, 0.0)))
+                    .additional_mass(FINGER_MASS)
+                    .can_sleep(false)
+                    .ccd_enabled(true),
+            );
+            let pad = world.insert_collider(
+                ColliderBuilder::cuboid(PAD_WIDTH / 2.0, PAD_THICKNESS / 2.0, PAD_HEIGHT / 2.0)
+                    .translation(Vector::new(
+                        0.0,
+                        side * PAD_THICKNESS / 2.0,
+                        TCP_OFFSET - PAD_HEIGHT / 2.0,
+                    ))
+                    .density(0.0)
+                    .friction(pad_friction)
+                    .friction_combine_rule(CoefficientCombineRule::Multiply)
+                    .collision_groups(groups::finger()),
+                Some(finger),
+            );
+            let link_length = TCP_OFFSET - PAD_HEIGHT - PALM_LENGTH;
+            let link = world.insert_collider(
+                ColliderBuilder::cuboid(PAD_WIDTH / 2.0, PAD_THICKNESS / 2.0, link_length / 2.0)
+                    .translation(Vector::new(
+                        0.0,
+                        side * (LINK_SETBACK + PAD_THICKNESS / 2.0),
+                        PALM_LENGTH + link_length / 2.0,
+                    ))
+                    .density(0.0)
+                    .friction(pad_friction)
+                    .friction_combine_rule(CoefficientCombineRule::Multiply)
+                    .collision_groups(groups::finger()),
+                Some(finger),
+            );
+            let joint = PrismaticJointBuilder::new(Vector::Y * side)
+                .local_anchor1(Vector::ZERO)
+                .local_anchor2(Vector::ZERO)
+                .limits([0.0, half_open])
+                .motor_model(MotorModel::ForceBased)
+                .motor_velocity(FINGER_SPEED, 1.0e4)
+                .motor_max_force(force)
+                .contacts_enabled(false);
+            joints.push(world.insert_impulse_joint(palm, finger, joint));
+            fingers.push(finger);
+            finger_colliders.push(vec![pad, link]);
+            pads.push(pad);
+        }
+        Self {
+            palm,
+            palm_collider,
+            fingers: [fingers[0], fingers[1]],
+            finger_colliders: [finger_colliders[0].clone(), finger_colliders[1].clone()],
+            pads: [pads[0], pads[1]],
+            joints: [joints[0], joints[1]],
+            force,
+        }
+    }
+
+    /// Commands both finger motors: positive speed opens.
+    fn command(&self, world: &mut PhysicsWorld, speed: f32) {
+        for handle in self.joints {
+            if let Some(joint) = world.impulse_joints.get_mut(handle, true) {
+                joint.data.set_motor_velocity(JointAxis::LinX, speed, 1.0e4);
+                joint.data.set_motor_max_force(JointAxis::LinX, self.force);
+            }
+        }
+    }
+
+    /// Starts closing with the bounded force.
+    pub fn close(&self, world: &mut PhysicsWorld) {
+        self.command(world, -FINGER_SPEED);
+    }
+
+    /// Starts opening.
+    pub fn open(&self, world: &mut PhysicsWorld) {
+        self.command(world, FINGER_SPEED);
+    }
+
+    /// Moves the palm with tool0 at the end of the next step.
+    pub fn drive(&self, world: &mut PhysicsWorld, tool0: Pose) {
+        if let Some(palm) = world.bodies.get_mut(self.palm) {
+            palm.set_next_kinematic_position(tool0);
+        }
+    }
+
+    /// Distance between the pads' inner faces (m).
+    pub fn opening(&self, world: &PhysicsWorld) -> f32 {
+        let palm = world.bodies[self.palm].position();
+        let offset = |h: RigidBodyHandle| {
+            palm.inverse_transform_point(world.bodies[h].translation())
+                .y
+                .abs()
+        };
+        offset(self.fingers[0]) + offset(self.fingers[1])
+    }
+
+    /// Largest finger speed relative to the palm (m/s), to tell when a close has finished.
+    pub fn finger_speed(&self, world: &PhysicsWorld) -> f32 {
+        let palm = &world.bodies[self.palm];
+        self.fingers
+            .iter()
+            .map(|&f| (world.bodies[f].linvel() - palm.linvel()).length())
+            .fold(0.0, f32::max)
+    }
+
+    /// Sets every gripper collider's interaction groups (parking disables them).
+    pub fn set_collisions(&self, world: &mut PhysicsWorld, enabled: bool) {
+        let mut set = |h: ColliderHandle, g: InteractionGroups| {
+            if let Some(c) = world.colliders.get_mut(h) {
+                c.set_collision_groups(g);
+            }
+        };
+        set(
+            self.palm_collider,
+            if enabled { groups::arm() } else { groups::none() },
+        );
+        for h in self.finger_colliders.iter().flatten() {
+            set(*h, if enabled { groups::finger() } else { groups::none() });
+        }
+    }
+
+    /// The gripper's drawable boxes in world coordinates.
+    pub fn drawables(&self, world: &PhysicsWorld) -> Vec<(Pose, Vector, [f32; 3])> {
+        let mut out = Vec::new();
+        for (h, color) in std::iter::once((self.palm_collider, [0.15, 0.15, 0.17])).chain(
+            self.finger_colliders
+                .iter()
+                .flatten()
+                .map(|h| (*h, [0.25, 0.25, 0.28])),
+        ) {
+            let c = &world.colliders[h];
+            if let Some(cuboid) = c.shape().as_cuboid() {
+                out.push((*c.position(), cuboid.half_extents, color));
+            }
+        }
+        out
+    }
+}
