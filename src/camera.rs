@@ -6,6 +6,11 @@
 //! "depth" always means the distance along that axis (not the length of the ray).
 use rapier3d::math::{Pose, Rotation as Quat, Vector as Vec3};
 
+/// Height of the top-down camera's eye above the table (metres), as written in the SPEC.
+// The SPEC value, deliberately not 1/√2 (0.7071068): depth maps must match it exactly.
+#[allow(clippy::approx_constant)]
+pub const TOP_DOWN_EYE_HEIGHT: f32 = 0.70711;
+
 /// An ideal pinhole camera (no distortion) with intrinsics in pixels and a rigid pose.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Camera {
@@ -36,7 +41,7 @@ impl Camera {
     /// Image columns therefore run along world +y and rows along world +x.
     pub fn top_down() -> Self {
         Self::look_at(
-            Vec3::new(0.5, 0.0, 0.70711),
+            Vec3::new(0.5, 0.0, TOP_DOWN_EYE_HEIGHT),
             Vec3::new(0.5, 0.0, 0.0),
             Vec3::new(-1.0, 0.0, 0.0),
             80.0,
@@ -155,6 +160,9 @@ mod tests {
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
+    /// SPEC eye height, written out independently of the constant under test.
+    #[allow(clippy::approx_constant)]
+    const SPEC_EYE_Z: f32 = 0.70711;
     /// 64 / tan(40°), written out so the test does not reuse the camera's own formula.
     const SPEC_F: f32 = 76.272_23;
 
@@ -162,7 +170,7 @@ mod tests {
         Vec3::new(
             0.5 + (v as f32 + 0.5 - 64.0) * d / SPEC_F,
             (u as f32 + 0.5 - 64.0) * d / SPEC_F,
-            0.70711 - d,
+            SPEC_EYE_Z - d,
         )
     }
 
@@ -178,24 +186,38 @@ mod tests {
         assert!((c.fy - SPEC_F).abs() < 1e-4);
         assert_eq!((c.cx, c.cy), (64.0, 64.0));
         assert_eq!((c.near, c.far), (0.01, 10.0));
-        assert!(close(c.eye(), Vec3::new(0.5, 0.0, 0.70711), 0.0));
+        assert!(close(c.eye(), Vec3::new(0.5, 0.0, SPEC_EYE_Z), 0.0));
     }
 
     #[test]
     fn top_down_axes_match_spec() {
         let c = Camera::top_down();
         let r = c.pose.rotation;
-        assert!(close(r * Vec3::X, Vec3::Y, 1e-6), "image right should be world +y");
-        assert!(close(r * Vec3::Y, Vec3::X, 1e-6), "image down should be world +x");
-        assert!(close(r * Vec3::Z, -Vec3::Z, 1e-6), "optical axis should be world -z");
+        assert!(
+            close(r * Vec3::X, Vec3::Y, 1e-6),
+            "image right should be world +y"
+        );
+        assert!(
+            close(r * Vec3::Y, Vec3::X, 1e-6),
+            "image down should be world +x"
+        );
+        assert!(
+            close(r * Vec3::Z, -Vec3::Z, 1e-6),
+            "optical axis should be world -z"
+        );
     }
 
     #[test]
     fn pixel_to_world_matches_spec_formula() {
         let c = Camera::top_down();
         let mut rng = ChaCha8Rng::seed_from_u64(1);
-        let mut cases: Vec<(u32, u32, f32)> =
-            vec![(0, 0, 0.7), (127, 127, 0.7), (64, 64, 0.5), (0, 127, 0.01), (127, 0, 9.9)];
+        let mut cases: Vec<(u32, u32, f32)> = vec![
+            (0, 0, 0.7),
+            (127, 127, 0.7),
+            (64, 64, 0.5),
+            (0, 127, 0.01),
+            (127, 0, 9.9),
+        ];
         for _ in 0..2000 {
             cases.push((
                 rng.random_range(0..128),
@@ -234,7 +256,10 @@ mod tests {
         let corner = c.ray_direction(0.0, 0.0);
         assert!((corner.length() - 1.0).abs() < 1e-6);
         // Top-left of the image is towards world -x (image up) and -y (image left).
-        assert!(corner.x < 0.0 && corner.y < 0.0 && corner.z < 0.0, "{corner}");
+        assert!(
+            corner.x < 0.0 && corner.y < 0.0 && corner.z < 0.0,
+            "{corner}"
+        );
     }
 
     #[test]
@@ -243,18 +268,18 @@ mod tests {
         let [u, v, d] = c.project(Vec3::new(0.6, 0.1, 0.0)).unwrap();
         assert!(v > 64.0, "row {v} should be below the centre");
         assert!(u > 64.0, "column {u} should be right of the centre");
-        assert!((d - 0.70711).abs() < 1e-6);
+        assert!((d - SPEC_EYE_Z).abs() < 1e-6);
         // Exact values from the SPEC formula inverted.
-        assert!((u - (64.0 + 0.1 * SPEC_F / 0.70711)).abs() < 1e-3);
-        assert!((v - (64.0 + 0.1 * SPEC_F / 0.70711)).abs() < 1e-3);
+        assert!((u - (64.0 + 0.1 * SPEC_F / SPEC_EYE_Z)).abs() < 1e-3);
+        assert!((v - (64.0 + 0.1 * SPEC_F / SPEC_EYE_Z)).abs() < 1e-3);
     }
 
     #[test]
     fn project_rejects_points_behind_or_at_near_plane() {
         let c = Camera::top_down();
         assert!(c.project(Vec3::new(0.5, 0.0, 1.0)).is_none());
-        assert!(c.project(Vec3::new(0.5, 0.0, 0.70711 - 0.005)).is_none());
-        assert!(c.project(Vec3::new(0.5, 0.0, 0.70711 - 0.02)).is_some());
+        assert!(c.project(Vec3::new(0.5, 0.0, SPEC_EYE_Z - 0.005)).is_none());
+        assert!(c.project(Vec3::new(0.5, 0.0, SPEC_EYE_Z - 0.02)).is_some());
         assert!(c.project(Vec3::new(f32::NAN, 0.0, 0.0)).is_none());
     }
 
@@ -268,7 +293,10 @@ mod tests {
         assert!((c.fx - f).abs() < 1e-3 && (c.fy - f).abs() < 1e-3);
         // The target lands on the principal point at its Euclidean distance.
         let [u, v, d] = c.project(target).unwrap();
-        assert!((u - 160.0).abs() < 1e-3 && (v - 120.0).abs() < 1e-3, "{u} {v}");
+        assert!(
+            (u - 160.0).abs() < 1e-3 && (v - 120.0).abs() < 1e-3,
+            "{u} {v}"
+        );
         assert!((d - (target - eye).length()).abs() < 1e-5);
         // World up appears towards the top of the image; the top row of the image's
         // vertical field of view is at the expected angle.
@@ -280,7 +308,10 @@ mod tests {
         // Rotation is proper (right-handed) and orthonormal.
         let r = c.pose.rotation;
         assert!(close((r * Vec3::X).cross(r * Vec3::Y), r * Vec3::Z, 1e-6));
-        assert!((r * Vec3::X).z.abs() < 1e-6, "image rows stay level with up = z");
+        assert!(
+            (r * Vec3::X).z.abs() < 1e-6,
+            "image rows stay level with up = z"
+        );
     }
 
     #[test]
@@ -307,7 +338,10 @@ mod tests {
                 rng.random_range(-1.0..1.0),
             )
             .normalize_or(Vec3::X);
-            rotations.push(Quat::from_axis_angle(axis, rng.random_range(-3.14..3.14)));
+            rotations.push(Quat::from_axis_angle(
+                axis,
+                rng.random_range(-std::f32::consts::PI..std::f32::consts::PI),
+            ));
         }
         for q in rotations {
             let r = quat_from_basis(q * Vec3::X, q * Vec3::Y, q * Vec3::Z);

@@ -84,7 +84,7 @@ pub fn plan(
     }
     let world_of = |(u, v): (u32, u32)| camera.pixel_to_world(u, v, frame.depth_at(u, v));
     let centroid = pixels.iter().map(|&p| world_of(p)).sum::<Vector>() / pixels.len() as f32;
-    let height_map = HeightMap { camera, frame };
+    let cloud = Cloud::new(camera, frame);
 
     let mut best: Option<(f32, OraclePlan)> = None;
     let mut candidates = 0;
@@ -93,7 +93,7 @@ pub fn plan(
             candidates += 1;
             let angle_deg = k as f32 * 180.0 / config.angles as f32;
             let grasp = PixelGrasp { u, v, angle_deg };
-            let Some(plan) = evaluate(&height_map, grasp, centroid, config) else {
+            let Some(plan) = evaluate(&cloud, camera, frame, grasp, centroid, config) else {
                 continue;
             };
             // Clearance matters up to a few centimetres; beyond that, being central wins.
@@ -107,78 +107,104 @@ pub fn plan(
         .ok_or(OracleError::Ungraspable { candidates })
 }
 
-/// Surface heights seen by the camera, looked up along the camera ray through a world point.
-struct HeightMap<'a> {
-    camera: &'a Camera,
-    frame: &'a Frame,
+/// The camera's depth as a world point cloud, bucketed on a horizontal grid for box queries.
+struct Cloud {
+    min: [f32; 2],
+    cell: f32,
+    cols: usize,
+    rows: usize,
+    buckets: Vec<Vec<Vector>>,
 }
 
-impl HeightMap<'_> {
-    /// Height of the visible surface on the ray through `p`; +∞ outside the image (unknown = blocked).
-    fn height(&self, p: Vector) -> f32 {
-        let Some([u, v, _]) = self.camera.project(p) else {
-            return f32::INFINITY;
+impl Cloud {
+    fn new(camera: &Camera, frame: &Frame) -> Self {
+        let points: Vec<Vector> = (0..frame.height)
+            .flat_map(|v| (0..frame.width).map(move |u| (u, v)))
+            .filter(|&(u, v)| frame.depth_at(u, v) < camera.far)
+            .map(|(u, v)| camera.pixel_to_world(u, v, frame.depth_at(u, v)))
+            .collect();
+        let (lo, hi) = points.iter().fold(
+            ([f32::MAX; 2], [f32::MIN; 2]),
+            |(lo, hi), p| ([lo[0].min(p.x), lo[1].min(p.y)], [hi[0].max(p.x), hi[1].max(p.y)]),
+        );
+        let cell = 0.01;
+        let cols = (((hi[0] - lo[0]) / cell) as usize + 1).max(1);
+        let rows = (((hi[1] - lo[1]) / cell) as usize + 1).max(1);
+        let mut cloud = Self {
+            min: lo,
+            cell,
+            cols,
+            rows,
+            buckets: vec![Vec::new(); cols * rows],
         };
-        if u < 0.0 || v < 0.0 || u >= self.frame.width as f32 || v >= self.frame.height as f32 {
-            return f32::INFINITY;
+        for p in points {
+            let (i, j) = cloud.cell_of(p.x, p.y);
+            cloud.buckets[j * cols + i].push(p);
         }
-        let (u, v) = (u as u32, v as u32);
-        self.camera.pixel_to_world(u, v, self.frame.depth_at(u, v)).z
+        cloud
+    }
+
+    fn cell_of(&self, x: f32, y: f32) -> (usize, usize) {
+        let i = ((x - self.min[0]) / self.cell).clamp(0.0, (self.cols - 1) as f32) as usize;
+        let j = ((y - self.min[1]) / self.cell).clamp(0.0, (self.rows - 1) as f32) as usize;
+        (i, j)
+    }
+
+    /// Points within `radius` (horizontally) of `center`.
+    fn near(&self, center: Vector, radius: f32) -> impl Iterator<Item = Vector> + '_ {
+        let (i0, j0) = self.cell_of(center.x - radius, center.y - radius);
+        let (i1, j1) = self.cell_of(center.x + radius, center.y + radius);
+        (j0..=j1).flat_map(move |j| {
+            (i0..=i1).flat_map(move |i| self.buckets[j * self.cols + i].iter().copied())
+        })
     }
 }
 
 fn evaluate(
-    map: &HeightMap,
+    cloud: &Cloud,
+    camera: &Camera,
+    frame: &Frame,
     grasp: PixelGrasp,
     centroid: Vector,
     config: &OracleConfig,
 ) -> Option<OraclePlan> {
-    let target = world_grasp(map.camera, map.frame, grasp);
+    let target = world_grasp(camera, frame, grasp);
     let tcp = target.tcp;
     let along = target.closing;
     let across = Vector::new(-along.y, along.x, 0.0);
-    // Probe at mid-pad height: that is where the pads meet the object.
-    let probe_z = tcp.z + 0.015;
     let half_open = config.opening / 2.0;
-    let step = config.step;
-    let point = |s: f32, w: f32| {
-        let p = tcp + along * s + across * w;
-        Vector::new(p.x, p.y, probe_z)
-    };
-    // Object extent along the closing line at pad height, within the opening.
     let limit = half_open - config.margin;
-    let mut lo = 0.0f32;
-    let mut hi = 0.0f32;
-    let mut s = -half_open;
-    while s <= half_open {
-        let occupied = [-config.pad_width / 2.0, 0.0, config.pad_width / 2.0]
-            .iter()
-            .any(|&w| map.height(point(s, w)) > tcp.z + 0.003);
-        if occupied {
+    let pad_outer = half_open + config.pad_thickness + config.margin;
+    let pad_half_width = config.pad_width / 2.0 + config.margin;
+
+    let mut lo = f32::MAX;
+    let mut hi = f32::MIN;
+    let mut clearance = 0.05f32;
+    let reach = (pad_outer * pad_outer + pad_half_width * pad_half_width).sqrt();
+    for p in cloud.near(tcp, reach) {
+        let d = p - tcp;
+        let s = d.dot(along);
+        let w = d.dot(across).abs();
+        if w > pad_half_width || s.abs() > pad_outer {
+            continue;
+        }
+        if s.abs() >= half_open {
+            // Under a pad: the surface must be below the pad's lower edge.
+            if p.z >= tcp.z {
+                return None;
+            }
+            clearance = clearance.min(tcp.z - p.z);
+        } else if w <= config.pad_width / 2.0 && p.z > tcp.z + 0.003 {
+            // Between the pads at pad height: part of what will be squeezed.
             if s.abs() > limit {
                 return None;
             }
             lo = lo.min(s);
             hi = hi.max(s);
         }
-        s += step;
     }
-    // Both pads need free space down to the TCP height.
-    let mut clearance = 0.05f32;
-    for side in [-1.0f32, 1.0] {
-        let mut s = half_open;
-        while s <= half_open + config.pad_thickness + config.margin {
-            let mut w = -config.pad_width / 2.0 - config.margin;
-            while w <= config.pad_width / 2.0 + config.margin {
-                let free = tcp.z - map.height(point(side * s, w));
-                if free < 0.0 {
-                    return None;
-                }
-                clearance = clearance.min(free);
-                w += step;
-            }
-            s += step;
-        }
+    if lo > hi {
+        return None;
     }
     let off_center = Vector::new(tcp.x - centroid.x, tcp.y - centroid.y, 0.0).length()
         + (lo + hi).abs() / 2.0;

@@ -91,7 +91,9 @@ pub fn ray_cuboid(origin: Vec3, dir: Vec3, half: Vec3, tmin: f32, tmax: f32) -> 
         return None;
     }
     let mut nearest = Nearest::new(tmin, tmax);
-    nearest.offer(t_enter, || axis_normal(enter_axis, -dir[enter_axis].signum()));
+    nearest.offer(t_enter, || {
+        axis_normal(enter_axis, -dir[enter_axis].signum())
+    });
     if nearest.best.is_none() {
         nearest.offer(t_exit, || axis_normal(exit_axis, dir[exit_axis].signum()));
     }
@@ -367,7 +369,10 @@ mod tests {
                         hit.t
                     );
                     let before = p - d / len * 1e-3;
-                    assert!(solid.sdf(before) > 0.0, "{solid:?}: point before hit is inside");
+                    assert!(
+                        solid.sdf(before) > 0.0,
+                        "{solid:?}: point before hit is inside"
+                    );
                     // For a convex solid, stepping along a valid outward normal moves away
                     // from the surface by exactly the step.
                     assert!((hit.normal.length() - 1.0).abs() < 1e-5);
@@ -387,12 +392,54 @@ mod tests {
                     for k in 0..=steps {
                         let t = t_far * k as f32 / steps as f32;
                         let s = solid.sdf(o + d * t);
-                        assert!(s > -1e-4, "{solid:?}: missed ray goes inside at t={t} (o {o}, d {d})");
+                        assert!(
+                            s > -1e-4,
+                            "{solid:?}: missed ray goes inside at t={t} (o {o}, d {d})"
+                        );
                     }
                 }
             }
         }
-        assert!(hits > rays / 5 && misses > rays / 20, "{solid:?}: {hits} hits, {misses} misses");
+        assert!(
+            hits > rays / 5 && misses > rays / 20,
+            "{solid:?}: {hits} hits, {misses} misses"
+        );
+    }
+
+    /// Rays starting inside the solid report the exit point, and stay inside until then.
+    fn check_exits(solid: Solid, seed: u64, rays: usize) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let br = solid.bounding_radius();
+        let mut tested = 0;
+        while tested < rays {
+            let o = random_unit(&mut rng) * rng.random_range(0.0..br);
+            if solid.sdf(o) > -1e-3 {
+                continue;
+            }
+            tested += 1;
+            let d = random_unit(&mut rng) * rng.random_range(0.3..3.0);
+            let hit = solid
+                .cast(o, d, 0.0, 100.0)
+                .expect("a ray from inside must exit");
+            let p = o + d * hit.t;
+            assert!(solid.sdf(p).abs() < 1e-4, "{solid:?}: exit off surface {p}");
+            for k in 0..200 {
+                let t = hit.t * k as f32 / 200.0 - 1e-4 / d.length();
+                assert!(
+                    solid.sdf(o + d * t.max(0.0)) < 1e-4,
+                    "{solid:?}: left early"
+                );
+            }
+            assert!((solid.sdf(p + hit.normal * 1e-3) - 1e-3).abs() < 1e-4);
+        }
+    }
+
+    #[test]
+    fn rays_from_inside_exit() {
+        check_exits(Solid::Cuboid(Vec3::new(0.05, 0.08, 0.03)), 30, 200);
+        check_exits(Solid::Sphere(0.04), 31, 200);
+        check_exits(Solid::Cylinder(0.03, 0.06), 32, 200);
+        check_exits(Solid::Capsule(0.04, 0.1), 33, 200);
     }
 
     #[test]
@@ -440,7 +487,10 @@ mod tests {
         let d = Vec3::new(-0.2, -0.2, 0.0);
         let h = ray_cylinder(o, d, r, hh, 0.0, 10.0).unwrap();
         let p = o + d * h.t;
-        assert!((p.y - hh).abs() < 1e-6 && p.x <= r && h.normal == Vec3::Y, "{p}");
+        assert!(
+            (p.y - hh).abs() < 1e-6 && p.x <= r && h.normal == Vec3::Y,
+            "{p}"
+        );
     }
 
     #[test]
@@ -486,16 +536,28 @@ mod tests {
         assert!(ray_triangle(Vec3::new(0.2, 0.2, 1.0), Vec3::X, tri, 0.0, 10.0).is_none());
         assert!(ray_triangle(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z, tri, 0.0, 0.5).is_none());
         // Random rays through a two-triangle quad never fall through the shared diagonal.
-        let quad = [Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(1.0, 1.0, 0.0), Vec3::new(-1.0, 1.0, 0.0)];
+        let quad = [
+            Vec3::new(-1.0, -1.0, 0.0),
+            Vec3::new(1.0, -1.0, 0.0),
+            Vec3::new(1.0, 1.0, 0.0),
+            Vec3::new(-1.0, 1.0, 0.0),
+        ];
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         for _ in 0..20_000 {
             let s = rng.random_range(-0.9..0.9f32);
             let target = Vec3::new(s, s + rng.random_range(-1e-5..1e-5), 0.0);
-            let o = Vec3::new(rng.random_range(-1.0..1.0), rng.random_range(-1.0..1.0), 1.3);
+            let o = Vec3::new(
+                rng.random_range(-1.0..1.0),
+                rng.random_range(-1.0..1.0),
+                1.3,
+            );
             let d = target - o;
             let a = ray_triangle(o, d, [quad[0], quad[1], quad[2]], 0.0, 10.0);
             let b = ray_triangle(o, d, [quad[0], quad[2], quad[3]], 0.0, 10.0);
-            assert!(a.is_some() || b.is_some(), "ray through {target} fell through the diagonal");
+            assert!(
+                a.is_some() || b.is_some(),
+                "ray through {target} fell through the diagonal"
+            );
         }
     }
 
@@ -504,8 +566,15 @@ mod tests {
         let mut rng = ChaCha8Rng::seed_from_u64(6);
         for _ in 0..60 {
             let pose = Pose::from_parts(
-                Vec3::new(rng.random_range(-0.5..0.5), rng.random_range(-0.5..0.5), rng.random_range(0.0..0.5)),
-                Quat::from_axis_angle(random_unit(&mut rng), rng.random_range(0.0..6.28)),
+                Vec3::new(
+                    rng.random_range(-0.5..0.5),
+                    rng.random_range(-0.5..0.5),
+                    rng.random_range(0.0..0.5),
+                ),
+                Quat::from_axis_angle(
+                    random_unit(&mut rng),
+                    rng.random_range(0.0..std::f32::consts::TAU),
+                ),
             );
             let solid = Solid::Cylinder(0.04, 0.07);
             for _ in 0..50 {
@@ -517,7 +586,10 @@ mod tests {
                 };
                 let world_p = o + d * hit.t;
                 let local_p = pose.inverse_transform_point(world_p);
-                assert!(solid.sdf(local_p).abs() < 1e-4, "world hit off the posed cylinder");
+                assert!(
+                    solid.sdf(local_p).abs() < 1e-4,
+                    "world hit off the posed cylinder"
+                );
                 let n_world = pose.rotation * hit.normal;
                 assert!(solid.sdf(pose.inverse_transform_point(world_p + n_world * 1e-3)) > 0.9e-3);
             }

@@ -152,12 +152,15 @@ impl Workcell {
         if let Err(stop) = self.move_line(&ur5, grasp_tool0(grasp.tcp, closing), guard) {
             return self.abort(stop);
         }
+        self.trace("descended");
         self.gripper.close(&mut self.world);
         self.wait_for_fingers(1.0);
+        self.trace("closed");
         let carry = Guard { objects: false };
         if let Err(stop) = self.move_line(&ur5, grasp_tool0(above, closing), carry) {
             return self.abort(stop);
         }
+        self.trace("lifted");
         if let Err(failure) = self.check_held(&heights_before, "after the lift") {
             self.recover();
             return failure;
@@ -193,6 +196,16 @@ impl Workcell {
             placed: Some(self.locate(held)),
             sim_seconds: 0.0,
         }
+    }
+
+    fn trace(&self, phase: &str) {
+        tracing::debug!(
+            phase,
+            t = self.time(),
+            tool0 = ?self.tool0_pose().translation,
+            opening = self.gripper.opening(&self.world),
+            objects = ?self.objects.iter().map(|o| self.world.bodies[o.body].translation()).collect::<Vec<_>>(),
+        );
     }
 
     fn lift_of(&self, index: usize, heights_before: &[f32]) -> f32 {
@@ -382,6 +395,16 @@ impl Workcell {
             let previous = self.arm.joints;
             self.drive_arm(q);
             self.step();
+            if i % 12 == 0 && tracing::enabled!(tracing::Level::TRACE) {
+                let forces: Vec<f32> = self
+                    .gripper
+                    .pads
+                    .iter()
+                    .flat_map(|&p| self.objects.iter().map(move |o| (p, o.collider)))
+                    .map(|(p, c)| self.contact_force(p, c))
+                    .collect();
+                tracing::trace!(t = self.time(), opening = self.gripper.opening(&self.world), ?forces, z = ?self.objects.first().map(|o| self.world.bodies[o.body].translation().z));
+            }
             if let Some(guard) = guard {
                 if let Some(what) = self.collision(guard) {
                     // The arm stops: it stays where it was before this step.

@@ -274,6 +274,7 @@ pub(crate) struct Gripper {
 
 /// Closing and opening speed of each finger (m/s).
 const FINGER_SPEED: f32 = 0.15;
+const FINGER_DAMPING: f32 = 1.0e8;
 
 impl Gripper {
     /// Builds the gripper open at `tool0`, with `force` newtons per finger.
@@ -300,9 +301,9 @@ impl Gripper {
             let finger = world.insert_body(
                 RigidBodyBuilder::dynamic()
                     .pose(tool0 * Pose::from_translation(Vector::new(0.0, side * half_open, 0.0)))
-                    .additional_mass(FINGER_MASS)
-                    .can_sleep(false)
-                    .ccd_enabled(true),
+                    // No CCD: its motion clamping hides the contact from the motor, which
+                    // then never builds up the grip force.
+                    .can_sleep(false),
             );
             let pad = world.insert_collider(
                 ColliderBuilder::cuboid(PAD_WIDTH / 2.0, PAD_THICKNESS / 2.0, PAD_HEIGHT / 2.0)
@@ -311,7 +312,7 @@ impl Gripper {
                         side * PAD_THICKNESS / 2.0,
                         TCP_OFFSET - PAD_HEIGHT / 2.0,
                     ))
-                    .density(0.0)
+                    .mass(FINGER_MASS / 2.0)
                     .friction(pad_friction)
                     .friction_combine_rule(CoefficientCombineRule::Multiply)
                     .collision_groups(groups::finger()),
@@ -325,18 +326,22 @@ impl Gripper {
                         side * (LINK_SETBACK + PAD_THICKNESS / 2.0),
                         PALM_LENGTH + link_length / 2.0,
                     ))
-                    .density(0.0)
+                    .mass(FINGER_MASS / 2.0)
                     .friction(pad_friction)
                     .friction_combine_rule(CoefficientCombineRule::Multiply)
                     .collision_groups(groups::finger()),
                 Some(finger),
             );
+            // Anchored at the pads: with the anchor up at the palm, the long lever arm to the
+            // pad let rapier's joint solve absorb the motor force (1 N reached the object
+            // instead of 40 N).
+            let anchor = Vector::new(0.0, 0.0, TCP_OFFSET - PAD_HEIGHT / 2.0);
             let joint = PrismaticJointBuilder::new(Vector::Y * side)
-                .local_anchor1(Vector::ZERO)
-                .local_anchor2(Vector::ZERO)
+                .local_anchor1(anchor)
+                .local_anchor2(anchor)
                 .limits([0.0, half_open])
-                .motor_model(MotorModel::ForceBased)
-                .motor_velocity(FINGER_SPEED, 1.0e4)
+                .motor_model(MotorModel::AccelerationBased)
+                .motor_velocity(FINGER_SPEED, FINGER_DAMPING)
                 .motor_max_force(force)
                 .contacts_enabled(false);
             joints.push(world.insert_impulse_joint(palm, finger, joint));
@@ -359,7 +364,7 @@ impl Gripper {
     fn command(&self, world: &mut PhysicsWorld, speed: f32) {
         for handle in self.joints {
             if let Some(joint) = world.impulse_joints.get_mut(handle, true) {
-                joint.data.set_motor_velocity(JointAxis::LinX, speed, 1.0e4);
+                joint.data.set_motor_velocity(JointAxis::LinX, speed, FINGER_DAMPING);
                 joint.data.set_motor_max_force(JointAxis::LinX, self.force);
             }
         }
