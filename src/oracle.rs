@@ -19,6 +19,14 @@ pub struct OracleConfig {
     pub pad_width: f32,
     /// Pad thickness along the closing line (m).
     pub pad_thickness: f32,
+    /// Pad height along the tool axis (m).
+    pub pad_height: f32,
+    /// Height of the palm's lower face above the TCP (m).
+    pub palm_height: f32,
+    /// Palm half extents along and across the closing line (m).
+    pub palm_half_along: f32,
+    /// Palm half extent across the closing line (m).
+    pub palm_half_across: f32,
     /// Safety margin around the pads and inside the opening (m).
     pub margin: f32,
     /// Number of angles tried over 180°.
@@ -33,7 +41,11 @@ impl Default for OracleConfig {
             opening: 0.085,
             pad_width: 0.022,
             pad_thickness: 0.010,
-            margin: 0.004,
+            pad_height: 0.035,
+            palm_height: 0.09,
+            palm_half_along: 0.062,
+            palm_half_across: 0.035,
+            margin: 0.006,
             angles: 16,
             step: 0.002,
         }
@@ -49,6 +61,9 @@ pub struct OraclePlan {
     pub clearance: f32,
     /// Distance from the grasp centre to the object's visible centroid (m).
     pub off_center: f32,
+    /// How far the squeezed span's middle is from the grasp centre (m): the pads would
+    /// push the object sideways by this much.
+    pub asymmetry: f32,
     /// Object width along the closing line at pad height (m).
     pub width: f32,
 }
@@ -96,8 +111,9 @@ pub fn plan(
             let Some(plan) = evaluate(&cloud, camera, frame, grasp, centroid, config) else {
                 continue;
             };
-            // Clearance matters up to a few centimetres; beyond that, being central wins.
-            let score = plan.clearance.min(0.03) - plan.off_center;
+            // Clearance matters up to a couple of centimetres; beyond that a centred
+            // squeeze near the centre of mass wins.
+            let score = plan.clearance.min(0.02) - 2.0 * plan.asymmetry - plan.off_center;
             if best.as_ref().is_none_or(|(s, _)| score > *s) {
                 best = Some((score, plan));
             }
@@ -160,6 +176,20 @@ impl Cloud {
     }
 }
 
+/// Fraction of the pad height at which the pad footprint must be in view.
+const OCCLUSION_PROBE: f32 = 1.0;
+
+/// True when the camera sees a surface in front of `p` (or `p` is outside the image).
+fn occluded(camera: &Camera, frame: &Frame, p: Vector) -> bool {
+    let Some([u, v, depth]) = camera.project(p) else {
+        return true;
+    };
+    if u < 0.0 || v < 0.0 || u >= frame.width as f32 || v >= frame.height as f32 {
+        return true;
+    }
+    frame.depth_at(u as u32, v as u32) < depth - 0.002
+}
+
 fn evaluate(
     cloud: &Cloud,
     camera: &Camera,
@@ -180,11 +210,22 @@ fn evaluate(
     let mut lo = f32::MAX;
     let mut hi = f32::MIN;
     let mut clearance = 0.05f32;
-    let reach = (pad_outer * pad_outer + pad_half_width * pad_half_width).sqrt();
+    let palm_half = [
+        config.palm_half_along + config.margin,
+        config.palm_half_across + config.margin,
+    ];
+    let reach = pad_outer.max(palm_half[0]) + pad_half_width.max(palm_half[1]);
     for p in cloud.near(tcp, reach) {
         let d = p - tcp;
         let s = d.dot(along);
         let w = d.dot(across).abs();
+        if s.abs() <= palm_half[0]
+            && w <= palm_half[1]
+            && p.z >= tcp.z + config.palm_height - config.margin
+        {
+            // The palm would come down on it.
+            return None;
+        }
         if w > pad_half_width || s.abs() > pad_outer {
             continue;
         }
@@ -206,12 +247,28 @@ fn evaluate(
     if lo > hi {
         return None;
     }
-    let off_center = Vector::new(tcp.x - centroid.x, tcp.y - centroid.y, 0.0).length()
-        + (lo + hi).abs() / 2.0;
+    // What the camera cannot see can still be in the way: a rounded side bulges out under
+    // the edge it shows. A pad's footprint must be in plain view at mid-pad height.
+    let mid_pad = tcp.z + config.pad_height * OCCLUSION_PROBE;
+    for side in [-1.0f32, 1.0] {
+        let mut s = half_open;
+        while s <= pad_outer {
+            let mut w = -pad_half_width;
+            while w <= pad_half_width {
+                let p = tcp + along * (side * s) + across * w;
+                if occluded(camera, frame, Vector::new(p.x, p.y, mid_pad)) {
+                    return None;
+                }
+                w += config.step * 2.0;
+            }
+            s += config.step * 2.0;
+        }
+    }
     Some(OraclePlan {
         grasp,
         clearance,
-        off_center,
+        off_center: Vector::new(tcp.x - centroid.x, tcp.y - centroid.y, 0.0).length(),
+        asymmetry: (lo + hi).abs() / 2.0,
         width: hi - lo,
     })
 }

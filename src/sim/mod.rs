@@ -40,6 +40,11 @@ const PEDESTAL_RADIUS: f32 = 0.0734;
 /// Friction of the totes, ground and pads; combined by multiplication, so contacts take the object's μ.
 pub const ENVIRONMENT_FRICTION: f32 = 1.0;
 
+/// Angular damping of objects (1/s).
+pub const OBJECT_ANGULAR_DAMPING: f32 = 1.0;
+/// Consecutive still steps (0.25 s) that count as settled.
+const SETTLED_STEPS: u32 = 60;
+
 /// Settings of a workcell that users may change.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct WorkcellConfig {
@@ -287,7 +292,9 @@ impl Workcell {
             RigidBodyBuilder::dynamic()
                 .pose(pose)
                 .ccd_enabled(true)
-                .angular_damping(0.05),
+                // Stands in for rolling resistance, which rapier lacks: without it a lying
+                // can keeps rolling across the bin long after the camera image is taken.
+                .angular_damping(OBJECT_ANGULAR_DAMPING),
         );
         let collider = self.world.insert_collider(
             ColliderBuilder::new(SharedShape::compound(shapes))
@@ -348,7 +355,8 @@ impl Workcell {
                 !b.is_sleeping() && (b.linvel().length() > 0.005 || b.angvel().length() > 0.05)
             });
             calm = if moving { 0 } else { calm + 1 };
-            if calm >= 24 {
+            // A rocking object is briefly still at each turn; a calm spell this long is rest.
+            if calm >= SETTLED_STEPS {
                 break;
             }
         }

@@ -146,12 +146,15 @@ impl Workcell {
         let guard = Guard { objects: true };
         self.gripper.open(&mut self.world);
         self.wait_for_fingers(0.6);
+        self.trace("opened");
         if let Err(stop) = self.move_joints(approach_q, guard) {
             return self.abort(stop);
         }
+        self.trace("approached");
         if let Err(stop) = self.move_line(&ur5, grasp_tool0(grasp.tcp, closing), guard) {
             return self.abort(stop);
         }
+        tracing::debug!(?closing, "intended closing direction");
         self.trace("descended");
         self.gripper.close(&mut self.world);
         self.wait_for_fingers(1.0);
@@ -203,6 +206,7 @@ impl Workcell {
             phase,
             t = self.time(),
             tool0 = ?self.tool0_pose().translation,
+            finger_axis = ?(self.tool0_pose().rotation * Vector::Y),
             opening = self.gripper.opening(&self.world),
             objects = ?self.objects.iter().map(|o| self.world.bodies[o.body].translation()).collect::<Vec<_>>(),
         );
@@ -431,18 +435,31 @@ impl Workcell {
             }
         }
         if guard.objects {
-            let hand = self
+            let parts = self
                 .arm
                 .colliders
                 .iter()
-                .chain([&self.gripper.palm_collider])
-                .chain(self.gripper.finger_colliders.iter().flatten());
-            for &c in hand {
+                .map(|&c| (c, "arm"))
+                .chain([(self.gripper.palm_collider, "palm")])
+                .chain(
+                    self.gripper
+                        .finger_colliders
+                        .iter()
+                        .flatten()
+                        .map(|&c| (c, "finger")),
+                );
+            for (c, part) in parts {
                 for object in &self.objects {
                     let force = self.contact_force(c, object.collider);
                     if force > OBJECT_FORCE_LIMIT {
+                        tracing::debug!(
+                            part,
+                            tool0 = ?self.tool0_pose().translation,
+                            object = ?self.world.bodies[object.body].translation(),
+                            "pressed"
+                        );
                         return Some(format!(
-                            "the hand pressed on {} with {force:.0} N",
+                            "the {part} pressed on {} with {force:.0} N",
                             object.model.name
                         ));
                     }
