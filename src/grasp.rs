@@ -50,6 +50,14 @@ pub fn closing_direction(camera: &Camera, angle_deg: f32) -> Vector {
     Vector::new(d.x, d.y, 0.0).normalize()
 }
 
+/// The image angle (degrees, [0, 180)) whose closing line runs along the horizontal world
+/// direction `direction`: the inverse of [`closing_direction`].
+pub fn image_angle(camera: &Camera, direction: Vector) -> f32 {
+    let right = camera.pose.rotation * Vector::X;
+    let down = camera.pose.rotation * Vector::Y;
+    normalize_angle(direction.dot(down).atan2(direction.dot(right)).to_degrees())
+}
+
 /// The world grasp for a pixel grasp, using the frame's depth at that pixel.
 pub fn world_grasp(camera: &Camera, frame: &Frame, grasp: PixelGrasp) -> WorldGrasp {
     let depth = frame.depth_at(grasp.u, grasp.v);
@@ -87,5 +95,15 @@ mod tests {
         let d = closing_direction(&camera, 30.0);
         let expected = Vector::new(30f32.to_radians().sin(), 30f32.to_radians().cos(), 0.0);
         assert!((d - expected).length() < 1e-5, "{d:?}");
+    }
+
+    #[test]
+    fn image_angle_inverts_closing_direction() {
+        let camera = Camera::top_down();
+        for k in 0..36 {
+            let angle = k as f32 * 5.0;
+            let back = image_angle(&camera, closing_direction(&camera, angle));
+            assert!((back - angle).abs() < 1e-3, "{angle} -> {back}");
+        }
     }
 }

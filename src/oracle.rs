@@ -29,6 +29,8 @@ pub struct OracleConfig {
     pub palm_half_across: f32,
     /// Safety margin around the pads and inside the opening (m).
     pub margin: f32,
+    /// Largest shift of the squeezed outline across a pad's width (m); more is a slanted face.
+    pub max_slant: f32,
     /// Number of angles tried over 180°.
     pub angles: u32,
     /// Sampling step along and across the closing line (m).
@@ -46,6 +48,7 @@ impl Default for OracleConfig {
             palm_half_along: 0.062,
             palm_half_across: 0.035,
             margin: 0.006,
+            max_slant: 0.010,
             angles: 16,
             step: 0.002,
         }
@@ -66,6 +69,8 @@ pub struct OraclePlan {
     pub asymmetry: f32,
     /// Object width along the closing line at pad height (m).
     pub width: f32,
+    /// How much the squeezed outline shifts across a pad's width (m): 0 for faces square to the jaw.
+    pub slant: f32,
 }
 
 /// Why no grasp was found.
@@ -75,8 +80,8 @@ pub enum OracleError {
     #[error("object id {id} is not visible in the image")]
     NotVisible { id: u16 },
     /// No candidate passed the width and clearance checks.
-    #[error("ungraspable in this pose: none of {candidates} candidate grasps fits the open jaw with free space for both pads")]
-    Ungraspable { candidates: usize },
+    #[error("ungraspable in this pose: none of {candidates} candidate grasps works ({reasons})")]
+    Ungraspable { candidates: usize, reasons: String },
 }
 
 /// Plans a grasp on the object whose mask id is `id`.
@@ -103,24 +108,96 @@ pub fn plan(
 
     let mut best: Option<(f32, OraclePlan)> = None;
     let mut candidates = 0;
+    let mut rejected = [0usize; Reject::COUNT];
     for &(u, v) in &pixels {
         for k in 0..config.angles {
             candidates += 1;
             let angle_deg = k as f32 * 180.0 / config.angles as f32;
             let grasp = PixelGrasp { u, v, angle_deg };
-            let Some(plan) = evaluate(&cloud, camera, frame, grasp, centroid, config) else {
-                continue;
+            let plan = match evaluate(&cloud, camera, frame, grasp, centroid, config) {
+                Ok(plan) => plan,
+                Err(reject) => {
+                    rejected[reject as usize] += 1;
+                    continue;
+                }
             };
             // Clearance matters up to a couple of centimetres; beyond that a centred
             // squeeze near the centre of mass wins.
-            let score = plan.clearance.min(0.02) - 2.0 * plan.asymmetry - plan.off_center;
+            let score =
+                plan.clearance.min(0.02) - 2.0 * plan.asymmetry - plan.off_center - plan.slant;
             if best.as_ref().is_none_or(|(s, _)| score > *s) {
                 best = Some((score, plan));
             }
         }
     }
     best.map(|(_, plan)| plan)
-        .ok_or(OracleError::Ungraspable { candidates })
+        .ok_or_else(|| OracleError::Ungraspable {
+            candidates,
+            reasons: Reject::ALL
+                .iter()
+                .filter(|r| rejected[**r as usize] > 0)
+                .map(|r| format!("{} {}", rejected[*r as usize], r.describe()))
+                .collect::<Vec<_>>()
+                .join(", "),
+        })
+}
+
+/// Checks one grasp the way the planner does, and says why it would be rejected.
+pub fn assess(
+    camera: &Camera,
+    frame: &Frame,
+    id: u16,
+    grasp: PixelGrasp,
+    config: &OracleConfig,
+) -> Result<OraclePlan, String> {
+    let pixels: Vec<Vector> = (0..frame.height)
+        .flat_map(|v| (0..frame.width).map(move |u| (u, v)))
+        .filter(|&(u, v)| frame.id_at(u, v) == id)
+        .map(|(u, v)| camera.pixel_to_world(u, v, frame.depth_at(u, v)))
+        .collect();
+    if pixels.is_empty() {
+        return Err(OracleError::NotVisible { id }.to_string());
+    }
+    let centroid = pixels.iter().copied().sum::<Vector>() / pixels.len() as f32;
+    let cloud = Cloud::new(camera, frame);
+    evaluate(&cloud, camera, frame, grasp, centroid, config).map_err(|r| r.describe().to_owned())
+}
+
+/// Why a candidate grasp was rejected.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Reject {
+    TooWide,
+    PadBlocked,
+    PadHidden,
+    Palm,
+    NothingBetweenPads,
+    Edge,
+    Slanted,
+}
+
+impl Reject {
+    const COUNT: usize = 7;
+    const ALL: [Reject; Reject::COUNT] = [
+        Reject::TooWide,
+        Reject::PadBlocked,
+        Reject::PadHidden,
+        Reject::Palm,
+        Reject::NothingBetweenPads,
+        Reject::Edge,
+        Reject::Slanted,
+    ];
+
+    fn describe(self) -> &'static str {
+        match self {
+            Reject::TooWide => "wider than the opening",
+            Reject::PadBlocked => "no room for a pad",
+            Reject::PadHidden => "a pad's footprint hidden from the camera",
+            Reject::Palm => "palm would hit something",
+            Reject::NothingBetweenPads => "nothing between the pads",
+            Reject::Edge => "pads would only catch an edge",
+            Reject::Slanted => "faces slanted to the jaw",
+        }
+    }
 }
 
 /// The camera's depth as a world point cloud, bucketed on a horizontal grid for box queries.
@@ -197,7 +274,7 @@ fn evaluate(
     grasp: PixelGrasp,
     centroid: Vector,
     config: &OracleConfig,
-) -> Option<OraclePlan> {
+) -> Result<OraclePlan, Reject> {
     let target = world_grasp(camera, frame, grasp);
     let tcp = target.tcp;
     let along = target.closing;
@@ -209,6 +286,9 @@ fn evaluate(
 
     let mut lo = f32::MAX;
     let mut hi = f32::MIN;
+    let mut covered = [false; 3];
+    let mut side_lo = [f32::MAX; 2];
+    let mut side_hi = [f32::MIN; 2];
     let mut clearance = 0.05f32;
     let palm_half = [
         config.palm_half_along + config.margin,
@@ -218,13 +298,13 @@ fn evaluate(
     for p in cloud.near(tcp, reach) {
         let d = p - tcp;
         let s = d.dot(along);
-        let w = d.dot(across).abs();
+        let signed_w = d.dot(across);
+        let w = signed_w.abs();
         if s.abs() <= palm_half[0]
             && w <= palm_half[1]
             && p.z >= tcp.z + config.palm_height - config.margin
         {
-            // The palm would come down on it.
-            return None;
+            return Err(Reject::Palm);
         }
         if w > pad_half_width || s.abs() > pad_outer {
             continue;
@@ -232,20 +312,35 @@ fn evaluate(
         if s.abs() >= half_open {
             // Under a pad: the surface must be below the pad's lower edge.
             if p.z >= tcp.z {
-                return None;
+                return Err(Reject::PadBlocked);
             }
             clearance = clearance.min(tcp.z - p.z);
         } else if w <= config.pad_width / 2.0 && p.z > tcp.z + 0.003 {
             // Between the pads at pad height: part of what will be squeezed.
             if s.abs() > limit {
-                return None;
+                return Err(Reject::TooWide);
             }
             lo = lo.min(s);
             hi = hi.max(s);
+            let half = usize::from(signed_w > 0.0);
+            side_lo[half] = side_lo[half].min(s);
+            side_hi[half] = side_hi[half].max(s);
+            // Which halves of the pads' width the squeezed part covers.
+            if signed_w < -config.pad_width / 4.0 {
+                covered[0] = true;
+            } else if signed_w > config.pad_width / 4.0 {
+                covered[1] = true;
+            } else {
+                covered[2] = true;
+            }
         }
     }
     if lo > hi {
-        return None;
+        return Err(Reject::NothingBetweenPads);
+    }
+    // A grasp whose pads only catch the object's edge lets it pivot out.
+    if covered.iter().filter(|&&c| c).count() < 2 {
+        return Err(Reject::Edge);
     }
     // What the camera cannot see can still be in the way: a rounded side bulges out under
     // the edge it shows. A pad's footprint must be in plain view at mid-pad height.
@@ -257,16 +352,29 @@ fn evaluate(
             while w <= pad_half_width {
                 let p = tcp + along * (side * s) + across * w;
                 if occluded(camera, frame, Vector::new(p.x, p.y, mid_pad)) {
-                    return None;
+                    return Err(Reject::PadHidden);
                 }
                 w += config.step * 2.0;
             }
             s += config.step * 2.0;
         }
     }
-    Some(OraclePlan {
+    // Where the squeezed outline differs between the two halves of a pad, the surface is
+    // slanted to the jaw and a squeeze pushes the object out sideways.
+    let slant = if side_lo[0] <= side_hi[0] && side_lo[1] <= side_hi[1] {
+        (side_lo[0] - side_lo[1])
+            .abs()
+            .max((side_hi[0] - side_hi[1]).abs())
+    } else {
+        config.pad_width
+    };
+    if slant > config.max_slant {
+        return Err(Reject::Slanted);
+    }
+    Ok(OraclePlan {
         grasp,
         clearance,
+        slant,
         off_center: Vector::new(tcp.x - centroid.x, tcp.y - centroid.y, 0.0).length(),
         asymmetry: (lo + hi).abs() / 2.0,
         width: hi - lo,

@@ -299,9 +299,17 @@ struct LoadedMesh {
 }
 
 fn load_mesh_file(path: &Path, scale: Vector) -> Result<LoadedMesh, String> {
+    let mut bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("obj"))
+    {
+        bytes = obj_objects_as_groups(&bytes);
+    }
+    // `path` still locates the .mtl and textures; mesh-loader reads those itself.
     let scene = mesh_loader::Loader::default()
         .merge_meshes(false)
-        .load(path)
+        .load_from_slice(&bytes, path)
         .map_err(|e| e.to_string())?;
     let mut pieces = Vec::new();
     for mesh in &scene.meshes {
@@ -350,6 +358,42 @@ fn load_mesh_file(path: &Path, scale: Vector) -> Result<LoadedMesh, String> {
     })
 }
 
+/// Makes every OBJ object (`o`) and group (`g`) its own mesh, keeping the active material.
+///
+/// mesh-loader 0.1 splits meshes at `g` lines but ignores `o` lines, so the convex pieces of a
+/// V-HACD file (`o convex_0`, `o convex_1`, …) came back as one mesh, and their single hull
+/// filled the gaps between the pieces. It also drops the active `usemtl` at every `g`, although
+/// in OBJ a material stays in force until the next `usemtl`. So `o name` is rewritten as
+/// `g name`, and the last `usemtl` line is repeated after each group line.
+fn obj_objects_as_groups(bytes: &[u8]) -> Vec<u8> {
+    let mut out = Vec::with_capacity(bytes.len() + 256);
+    let mut material: Option<&[u8]> = None;
+    for line in bytes.split_inclusive(|&b| b == b'\n') {
+        let is = |keyword: &[u8]| {
+            line.starts_with(keyword) && matches!(line.get(keyword.len()), Some(b' ' | b'\t'))
+        };
+        let push_line = |out: &mut Vec<u8>, line: &[u8]| {
+            out.extend_from_slice(line);
+            if !line.ends_with(b"\n") {
+                out.push(b'\n');
+            }
+        };
+        if is(b"o") || is(b"g") {
+            out.push(b'g');
+            push_line(&mut out, &line[1..]);
+            if let Some(usemtl) = material {
+                push_line(&mut out, usemtl);
+            }
+        } else {
+            if is(b"usemtl") {
+                material = Some(line);
+            }
+            out.extend_from_slice(line);
+        }
+    }
+    out
+}
+
 /// Mean colour of a texture image, the stand-in for textured YCB models.
 fn mean_texture_color(path: &Path) -> Result<[f32; 3], String> {
     let image = image::open(path)
@@ -358,8 +402,8 @@ fn mean_texture_color(path: &Path) -> Result<[f32; 3], String> {
     let pixels = (image.width() as u64 * image.height() as u64).max(1) as f64;
     let mut sum = [0u64; 3];
     for p in image.pixels() {
-        for c in 0..3 {
-            sum[c] += p.0[c] as u64;
+        for (total, channel) in sum.iter_mut().zip(p.0) {
+            *total += channel as u64;
         }
     }
     Ok(sum.map(|s| (s as f64 / pixels / 255.0) as f32))

@@ -428,16 +428,26 @@ fn white_urdf_material_with_texture_takes_the_texture_mean() {
 }
 
 /// Without a URDF material the OBJ's own .mtl `Kd` is the colour.
+///
+/// In OBJ a `usemtl` stays in force across later `o`/`g` lines, so the layouts where the
+/// material is named before the object or group must colour it too.
 #[test]
 fn mtl_diffuse_colour_is_used_without_urdf_material() {
     let mtl = "newmtl paint\nKd 0.2 0.4 0.6\n";
-    let obj = format!("mtllib visual.mtl\nusemtl paint\n{}", cube());
-    let color = visual_color(
-        &[("visual.obj", &obj), ("visual.mtl", mtl)],
-        None,
-        &visual_mesh("visual.obj", ""),
-    );
-    assert_color(color, [0.2, 0.4, 0.6], ".mtl Kd");
+    for header in [
+        "usemtl paint\n",
+        "o body\nusemtl paint\n",
+        "usemtl paint\no body\n",
+        "usemtl paint\ng body\n",
+    ] {
+        let obj = format!("mtllib visual.mtl\n{header}{}", cube());
+        let color = visual_color(
+            &[("visual.obj", &obj), ("visual.mtl", mtl)],
+            None,
+            &visual_mesh("visual.obj", ""),
+        );
+        assert_color(color, [0.2, 0.4, 0.6], &format!(".mtl Kd after {header:?}"));
+    }
 }
 
 /// The .mtl's `map_Kd` texture gives the mean colour, with or without a white URDF material:
@@ -508,10 +518,11 @@ fn unreadable_meshes_are_errors_naming_the_file() {
             b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n".to_vec(),
         ),
         ("badnumber.obj", b"v 0 0 zero\nf 1 1 1\n".to_vec()),
-        // A binary STL announcing five triangles but holding one.
+        // A binary STL cut off inside its second triangle. (A wrong triangle count alone is
+        // not an error: mesh-loader trusts the file size, as many real files miscount.)
         ("truncated.stl", {
-            let mut bytes = binary_stl(&tetra_triangles()[..1]);
-            bytes[80..84].copy_from_slice(&5u32.to_le_bytes());
+            let mut bytes = binary_stl(&tetra_triangles()[..2]);
+            bytes.truncate(bytes.len() - 20);
             bytes
         }),
     ];
@@ -680,5 +691,12 @@ fn imported_mesh_object_can_be_dropped_and_seen() {
         graspmap::sim::ObjectLocation::Bin1,
         "resting at {:?}",
         cell.object_pose(0).translation
+    );
+    // At rest on the tote floor its centre is half a box side above it (1.5 to 3 cm): the mesh
+    // hull, not some stand-in shape, is what touched the floor.
+    let height = cell.object_pose(0).translation.z - graspmap::sim::BIN_FLOOR_TOP;
+    assert!(
+        (0.015 - 0.003..=0.03 + 0.003).contains(&height),
+        "centre {height} m above the floor"
     );
 }

@@ -131,19 +131,27 @@ pub fn run(context: &Context, args: GraspArgs) -> anyhow::Result<()> {
         sim_seconds: cell.time(),
         render_seconds,
     };
-    print_result(&results, args.seed);
+    context.say(&result_line(&results, args.seed));
     if let Some(json) = &context.json {
-        write_report(json, "grasp", args.seed, &(context, &config), &results)?;
+        let resolved = serde_json::json!({
+            "global": context,
+            "workcell": config,
+            "oracle": OracleConfig::default(),
+            "object": args.object,
+            "source": source,
+            "record": args.record,
+        });
+        write_report(json, "grasp", args.seed, &resolved, &results)?;
     }
     Ok(())
 }
 
-fn print_result(r: &GraspResults, seed: u64) {
+fn result_line(r: &GraspResults, seed: u64) -> String {
     let grasp = match (r.pixel, r.angle_deg) {
         (Some([u, v]), Some(a)) => format!("pixel ({u}, {v}) angle {a:.1}°"),
         _ => "no grasp".to_owned(),
     };
-    println!(
+    format!(
         "{} seed {seed}: {} [{}] {grasp}: {} (sim {:.2} s, wall {:.2} s)",
         r.object,
         if r.success { "success" } else { "failure" },
@@ -151,7 +159,7 @@ fn print_result(r: &GraspResults, seed: u64) {
         r.detail,
         r.sim_seconds,
         r.wall_seconds
-    );
+    )
 }
 
 /// A uniformly random point of bin 1's floor, seen through the camera, and a uniform angle.

@@ -74,6 +74,15 @@ impl Context {
         Ok(Split::read(&self.split_path)?)
     }
 
+    /// Prints a human-readable result line: to stdout, unless the JSON report goes there.
+    pub fn say(&self, line: &str) {
+        if self.json.as_deref() == Some(Path::new("-")) {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
+        }
+    }
+
     /// Path of the robot assets.
     pub fn assets(&self) -> &Path {
         &self.assets

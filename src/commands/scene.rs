@@ -57,12 +57,12 @@ pub fn run(context: &Context, args: SceneArgs) -> anyhow::Result<()> {
         })
         .collect();
     for o in &objects {
-        println!(
+        context.say(&format!(
             "{:<18} at ({:.3}, {:.3}, {:.3}) m, {} pixels visible",
             o.name, o.position[0], o.position[1], o.position[2], o.visible_pixels
-        );
+        ));
     }
-    println!("wrote {}", args.out.display());
+    context.say(&format!("wrote {}", args.out.display()));
     let results = SceneResults {
         objects,
         image: args.out.display().to_string(),
@@ -71,7 +71,12 @@ pub fn run(context: &Context, args: SceneArgs) -> anyhow::Result<()> {
         sim_seconds: cell.time(),
     };
     if let Some(json) = &context.json {
-        write_report(json, "scene", args.seed, &(context, &config, &args.objects), &results)?;
+        let resolved = serde_json::json!({
+            "global": context,
+            "workcell": config,
+            "objects": args.objects,
+        });
+        write_report(json, "scene", args.seed, &resolved, &results)?;
     }
     Ok(())
 }

@@ -15,6 +15,8 @@ use crate::kinematics::{IkError, JointTrajectory, Joints, TrapezoidProfile, Ur5,
 pub const JOINT_SPEED: f64 = 3.0;
 /// Joint-space acceleration limit (rad/s²).
 pub const JOINT_ACCELERATION: f64 = 6.0;
+/// Joint-space acceleration limit while carrying an object (rad/s²).
+pub const CARRY_ACCELERATION: f64 = 2.0;
 /// Cartesian speed of the vertical descent and lift (m/s).
 pub const LINE_SPEED: f64 = 0.5;
 /// Cartesian acceleration of the vertical descent and lift (m/s²).
@@ -23,8 +25,9 @@ pub const LINE_ACCELERATION: f64 = 2.0;
 pub const APPROACH_HEIGHT: f32 = 0.3;
 /// Height an object must rise for a grasp to count (m).
 pub const LIFT_SUCCESS_HEIGHT: f32 = 0.2;
-/// A force this large between the arm (or fingers) and an object stops the arm (N).
-pub const OBJECT_FORCE_LIMIT: f32 = 60.0;
+/// A force this large between the arm (or fingers) and an object stops the arm (N): the
+/// UR5's default protective-stop force.
+pub const OBJECT_FORCE_LIMIT: f32 = 150.0;
 /// Penetration into the totes or ground that counts as a collision (m).
 pub const ENVIRONMENT_PENETRATION: f32 = 0.002;
 /// Below this opening the fingers count as fully closed (m).
@@ -178,6 +181,7 @@ impl Workcell {
                 return failure;
             }
         };
+        let lift_at_home = self.lift_of(held, &heights_before);
         // Place: carry to bin 2, release, and come back.
         // A collision on the way to bin 2 stops the arm; the object is released wherever it is,
         // and `placed` reports where it came to rest.
@@ -191,9 +195,8 @@ impl Workcell {
             success: true,
             reason: PickReason::Success,
             detail: format!(
-                "lifted {} by {:.3} m",
-                self.objects[held].model.name,
-                self.lift_of(held, &heights_before)
+                "carried {} home {:.2} m above where it lay",
+                self.objects[held].model.name, lift_at_home
             ),
             object: Some(self.objects[held].model.name.clone()),
             placed: Some(self.locate(held)),
@@ -331,8 +334,13 @@ impl Workcell {
     }
 
     fn move_joints(&mut self, target: Joints, guard: Guard) -> Result<(), Stop> {
-        let trajectory =
-            JointTrajectory::new(self.arm.joints, target, JOINT_SPEED, JOINT_ACCELERATION);
+        // Carrying, accelerate gently: a hard swing flings light objects out of the jaw.
+        let acceleration = if guard.objects {
+            JOINT_ACCELERATION
+        } else {
+            CARRY_ACCELERATION
+        };
+        let trajectory = JointTrajectory::new(self.arm.joints, target, JOINT_SPEED, acceleration);
         self.follow(|t| Some(trajectory.sample(t)), trajectory.duration(), Some(guard))
             .map_err(|e| e.unwrap_or_else(|| unreachable!("joint moves have no ik")))
     }
@@ -407,7 +415,7 @@ impl Workcell {
                     .flat_map(|&p| self.objects.iter().map(move |o| (p, o.collider)))
                     .map(|(p, c)| self.contact_force(p, c))
                     .collect();
-                tracing::trace!(t = self.time(), opening = self.gripper.opening(&self.world), ?forces, z = ?self.objects.first().map(|o| self.world.bodies[o.body].translation().z));
+                tracing::trace!(t = self.time(), opening = self.gripper.opening(&self.world), ?forces, object = ?self.objects.first().map(|o| self.world.bodies[o.body].translation()));
             }
             if let Some(guard) = guard {
                 if let Some(what) = self.collision(guard) {
