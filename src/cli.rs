@@ -80,7 +80,12 @@ pub struct GraspArgs {
     #[arg(long, value_name = "U,V", requires = "angle")]
     pub pixel: Option<String>,
     /// Grasp angle in degrees, clockwise in the image; normalised mod 180.
-    #[arg(long, value_name = "DEG", allow_negative_numbers = true, requires = "pixel")]
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_negative_numbers = true,
+        requires = "pixel"
+    )]
     pub angle: Option<f32>,
     /// Let the oracle planner choose the grasp from ground-truth mask and depth.
     #[arg(long)]
@@ -126,10 +131,18 @@ pub fn run() -> anyhow::Result<()> {
                 e.print()?;
                 return Ok(());
             }
-            // clap's own message names the flag and the fix; keep its first line only.
+            // clap's message names the flag and the fix over a few lines; fold it into one.
             let text = e.to_string();
-            let first = text.lines().next().unwrap_or("bad arguments");
-            bail!("{} (see graspmap --help)", first.trim_start_matches("error: "));
+            let message = text
+                .lines()
+                .take_while(|l| !l.trim().is_empty())
+                .map(str::trim)
+                .collect::<Vec<_>>()
+                .join(" ");
+            bail!(
+                "{} (see graspmap --help)",
+                message.trim_start_matches("error: ")
+            );
         }
     };
     init_logging(cli.global.quiet);
@@ -160,9 +173,18 @@ mod tests {
     fn pixel_parsing_rejects_out_of_image_and_garbage() {
         assert_eq!(parse_pixel("64,70").unwrap(), (64, 70));
         assert_eq!(parse_pixel(" 0 , 127 ").unwrap(), (0, 127));
-        assert!(parse_pixel("128,3").unwrap_err().to_string().contains("outside"));
-        assert!(parse_pixel("-1,3").unwrap_err().to_string().contains("'-1'"));
-        assert!(parse_pixel("12").unwrap_err().to_string().contains("two integers"));
+        assert!(parse_pixel("128,3")
+            .unwrap_err()
+            .to_string()
+            .contains("outside"));
+        assert!(parse_pixel("-1,3")
+            .unwrap_err()
+            .to_string()
+            .contains("'-1'"));
+        assert!(parse_pixel("12")
+            .unwrap_err()
+            .to_string()
+            .contains("two integers"));
     }
 
     #[test]

@@ -216,10 +216,14 @@ impl Cloud {
             .filter(|&(u, v)| frame.depth_at(u, v) < camera.far)
             .map(|(u, v)| camera.pixel_to_world(u, v, frame.depth_at(u, v)))
             .collect();
-        let (lo, hi) = points.iter().fold(
-            ([f32::MAX; 2], [f32::MIN; 2]),
-            |(lo, hi), p| ([lo[0].min(p.x), lo[1].min(p.y)], [hi[0].max(p.x), hi[1].max(p.y)]),
-        );
+        let (lo, hi) = points
+            .iter()
+            .fold(([f32::MAX; 2], [f32::MIN; 2]), |(lo, hi), p| {
+                (
+                    [lo[0].min(p.x), lo[1].min(p.y)],
+                    [hi[0].max(p.x), hi[1].max(p.y)],
+                )
+            });
         let cell = 0.01;
         let cols = (((hi[0] - lo[0]) / cell) as usize + 1).max(1);
         let rows = (((hi[1] - lo[1]) / cell) as usize + 1).max(1);

@@ -52,7 +52,11 @@ where
 }
 
 /// Writes an animated GIF atomically, `delay_cs` hundredths of a second per frame.
-pub fn save_gif_atomic(frames: &[image::RgbImage], delay_cs: u32, path: &Path) -> anyhow::Result<()> {
+pub fn save_gif_atomic(
+    frames: &[image::RgbImage],
+    delay_cs: u32,
+    path: &Path,
+) -> anyhow::Result<()> {
     use image::codecs::gif::{GifEncoder, Repeat};
     let mut bytes = Vec::new();
     {

@@ -150,7 +150,10 @@ impl UrdfFile {
         let mut visuals = Vec::new();
         for visual in &link.visual {
             let pose = urdf_pose(&visual.origin);
-            let named_color = visual.material.as_ref().and_then(|m| self.material_color(m));
+            let named_color = visual
+                .material
+                .as_ref()
+                .and_then(|m| self.material_color(m));
             let texture = visual
                 .material
                 .as_ref()
@@ -162,13 +165,13 @@ impl UrdfFile {
                     let color = match named_color {
                         Some(c) if !is_white(c) => c,
                         _ => match texture.or(mesh.texture.clone()) {
-                            Some(t) => mean_texture_color(&t).map_err(|message| {
-                                UrdfError::BadMesh {
+                            Some(t) => {
+                                mean_texture_color(&t).map_err(|message| UrdfError::BadMesh {
                                     link: link.name.clone(),
                                     mesh: t.clone(),
                                     message,
-                                }
-                            })?,
+                                })?
+                            }
                             None => named_color.or(mesh.color).unwrap_or(DEFAULT_COLOR),
                         },
                     };
@@ -325,7 +328,11 @@ fn load_mesh_file(path: &Path, scale: Vector) -> Result<LoadedMesh, String> {
             return Err("non-finite vertex coordinates".into());
         }
         let triangles = mesh.faces.clone();
-        if triangles.iter().flatten().any(|&i| i as usize >= vertices.len()) {
+        if triangles
+            .iter()
+            .flatten()
+            .any(|&i| i as usize >= vertices.len())
+        {
             return Err("face index out of range".into());
         }
         pieces.push(TriMesh {
@@ -541,10 +548,9 @@ fn bullet_lateral_frictions(text: &str) -> Result<Vec<(String, f32)>, String> {
             .find(|n| n.has_tag_name("lateral_friction"));
         if let Some(node) = friction {
             let raw = node.attribute("value").unwrap_or("");
-            let value: f32 = raw
-                .trim()
-                .parse()
-                .map_err(|_| format!("link '{name}': lateral_friction value '{raw}' is not a number"))?;
+            let value: f32 = raw.trim().parse().map_err(|_| {
+                format!("link '{name}': lateral_friction value '{raw}' is not a number")
+            })?;
             if !(value >= 0.0 && value.is_finite()) {
                 return Err(format!(
                     "link '{name}': lateral_friction must be non-negative, got {value}"
@@ -609,7 +615,11 @@ mod tests {
             0.0,
             std::f64::consts::FRAC_PI_2,
         );
-        assert!((r * Vector::Z - Vector::X).length() < 1e-6, "{:?}", r * Vector::Z);
+        assert!(
+            (r * Vector::Z - Vector::X).length() < 1e-6,
+            "{:?}",
+            r * Vector::Z
+        );
     }
 
     #[test]

@@ -53,7 +53,11 @@ fn pick_oracle(cell: &mut Workcell) -> PickOutcome {
 fn assert_success(outcome: &PickOutcome, cell: &Workcell) {
     assert!(outcome.success, "expected success, got {outcome:?}");
     assert_eq!(outcome.reason, PickReason::Success);
-    assert_eq!(cell.locate(0), ObjectLocation::Bin2, "placed object must rest in bin 2");
+    assert_eq!(
+        cell.locate(0),
+        ObjectLocation::Bin2,
+        "placed object must rest in bin 2"
+    );
 }
 
 /// A grasp that cannot hold: it must fail in contact with the object, not for an unrelated reason.
@@ -79,7 +83,10 @@ fn lying_can(axis_deg: f32) -> Workcell {
     let yaw = target.y.atan2(target.x) - FRAC_PI_2;
     let rotation = Rotation::from_rotation_z(yaw) * lay;
     let axis = rotation * Vector::Z;
-    assert!((image_angle(&camera, axis) - axis_deg).abs() < 0.01 || (image_angle(&camera, -axis) - axis_deg).abs() < 0.01);
+    assert!(
+        (image_angle(&camera, axis) - axis_deg).abs() < 0.01
+            || (image_angle(&camera, -axis) - axis_deg).abs() < 0.01
+    );
     placed(
         "YcbChipsCan",
         Pose::from_parts(Vector::new(0.52, 0.03, BIN_FLOOR_TOP + 0.0385), rotation),
@@ -188,7 +195,11 @@ fn grasp_on_empty_floor_closes_on_nothing() {
 
 #[test]
 fn the_same_seed_gives_bit_identical_scenes_and_images() {
-    let models = [model("YcbBanana"), model("YcbTomatoSoupCan"), model("YcbPear")];
+    let models = [
+        model("YcbBanana"),
+        model("YcbTomatoSoupCan"),
+        model("YcbPear"),
+    ];
     let scene = |seed| {
         let mut cell = Workcell::new(assets(), &Default::default()).unwrap();
         cell.drop_objects(&models, seed).unwrap();
@@ -207,7 +218,10 @@ fn the_same_seed_gives_bit_identical_scenes_and_images() {
     assert_eq!(poses_a, poses_b);
     assert_eq!(frame_a, frame_b);
     let (poses_c, _) = scene(8);
-    assert_ne!(poses_a, poses_c, "a different seed must give a different scene");
+    assert_ne!(
+        poses_a, poses_c,
+        "a different seed must give a different scene"
+    );
 }
 
 #[test]

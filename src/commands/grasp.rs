@@ -70,7 +70,10 @@ pub fn run(context: &Context, args: GraspArgs) -> anyhow::Result<()> {
         _ => None,
     };
     if !(args.grip_force > 0.0 && args.grip_force.is_finite()) {
-        anyhow::bail!("--grip-force {} must be a positive number of newtons", args.grip_force);
+        anyhow::bail!(
+            "--grip-force {} must be a positive number of newtons",
+            args.grip_force
+        );
     }
     let start = Instant::now();
     let model = context.library().load(&args.object)?;
@@ -88,8 +91,16 @@ pub fn run(context: &Context, args: GraspArgs) -> anyhow::Result<()> {
     let (source, choice) = if let Some(g) = given {
         (GraspSource::Given, Ok(g))
     } else if args.oracle {
-        let plan = oracle::plan(&camera, &frame, cell.objects()[0].id, &OracleConfig::default());
-        (GraspSource::Oracle, plan.map(|p| p.grasp).map_err(|e| e.to_string()))
+        let plan = oracle::plan(
+            &camera,
+            &frame,
+            cell.objects()[0].id,
+            &OracleConfig::default(),
+        );
+        (
+            GraspSource::Oracle,
+            plan.map(|p| p.grasp).map_err(|e| e.to_string()),
+        )
     } else {
         (GraspSource::Random, Ok(random_grasp(&camera, args.seed)))
     };
@@ -98,7 +109,8 @@ pub fn run(context: &Context, args: GraspArgs) -> anyhow::Result<()> {
         if let Ok(g) = &choice {
             draw_grasp(&mut image, g);
         }
-        save_image_atomic(&image, path).with_context(|| format!("writing --image {}", path.display()))?;
+        save_image_atomic(&image, path)
+            .with_context(|| format!("writing --image {}", path.display()))?;
     }
     if args.record.is_some() {
         cell.start_recording(record_camera(), RECORD_EVERY_STEPS);
@@ -211,7 +223,12 @@ pub fn draw_grasp(image: &mut image::RgbImage, g: &PixelGrasp) {
     let line = image::Rgb([255, 40, 40]);
     imageproc::drawing::draw_line_segment_mut(image, (cx - dx, cy - dy), (cx + dx, cy + dy), line);
     for (x, y) in [(cx - dx, cy - dy), (cx + dx, cy + dy)] {
-        imageproc::drawing::draw_filled_circle_mut(image, (x as i32, y as i32), 1, image::Rgb([40, 220, 40]));
+        imageproc::drawing::draw_filled_circle_mut(
+            image,
+            (x as i32, y as i32),
+            1,
+            image::Rgb([40, 220, 40]),
+        );
     }
     image.put_pixel(g.u.min(127), g.v.min(127), image::Rgb([255, 255, 0]));
 }

@@ -51,7 +51,8 @@ impl Context {
             .clone()
             .unwrap_or_else(|| objects_dir.join("split.json"));
         let threads = args.threads.unwrap_or_else(|| {
-            std::thread::available_parallelism().map_or(1, |n| n.get().min(u16::MAX as usize) as u16)
+            std::thread::available_parallelism()
+                .map_or(1, |n| n.get().min(u16::MAX as usize) as u16)
         });
         Ok(Self {
             data: args.data.clone(),

@@ -473,7 +473,12 @@ pub(crate) fn penetration(world: &PhysicsWorld, a: ColliderHandle, b: ColliderHa
 }
 
 /// Whether two colliders are in contact (within `gap` metres).
-pub(crate) fn in_contact(world: &PhysicsWorld, a: ColliderHandle, b: ColliderHandle, gap: f32) -> bool {
+pub(crate) fn in_contact(
+    world: &PhysicsWorld,
+    a: ColliderHandle,
+    b: ColliderHandle,
+    gap: f32,
+) -> bool {
     world.contact_pair(a, b).is_some_and(|pair| {
         pair.manifolds()
             .iter()
@@ -524,7 +529,10 @@ fn ring(r: f32, y: f32) -> impl Iterator<Item = Vector> {
 /// (a capsule; a sphere when `half` is 0).
 fn sphere_points(r: f32, half: f32) -> Vec<Vector> {
     let bands = ROUND_FACETS / 4;
-    let mut points = vec![Vector::new(0.0, r + half, 0.0), Vector::new(0.0, -r - half, 0.0)];
+    let mut points = vec![
+        Vector::new(0.0, r + half, 0.0),
+        Vector::new(0.0, -r - half, 0.0),
+    ];
     for b in 1..bands {
         let polar = b as f32 * std::f32::consts::FRAC_PI_2 / bands as f32;
         let (ring_r, ring_y) = (r * polar.sin(), r * polar.cos());

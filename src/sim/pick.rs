@@ -9,7 +9,9 @@ use rapier3d::math::{Pose, Rotation, Vector};
 use super::robot::gripper_geometry::TCP_OFFSET;
 use super::{in_contact, ObjectLocation, Workcell, PHYSICS_HZ};
 use crate::grasp::WorldGrasp;
-use crate::kinematics::{IkError, JointTrajectory, Joints, TrapezoidProfile, Ur5, HOME_JOINTS, PLACE_JOINTS};
+use crate::kinematics::{
+    IkError, JointTrajectory, Joints, TrapezoidProfile, Ur5, HOME_JOINTS, PLACE_JOINTS,
+};
 
 /// Joint-space speed limit of the trapezoidal moves (rad/s).
 pub const JOINT_SPEED: f64 = 3.0;
@@ -264,7 +266,9 @@ impl Workcell {
                     success: false,
                     reason,
                     detail,
-                    object: touching.first().map(|&i| self.objects[i].model.name.clone()),
+                    object: touching
+                        .first()
+                        .map(|&i| self.objects[i].model.name.clone()),
                     placed: None,
                     sim_seconds: 0.0,
                 })
@@ -301,8 +305,12 @@ impl Workcell {
     }
 
     fn recover_home(&mut self) {
-        let trajectory =
-            JointTrajectory::new(self.arm.joints, HOME_JOINTS, JOINT_SPEED, JOINT_ACCELERATION);
+        let trajectory = JointTrajectory::new(
+            self.arm.joints,
+            HOME_JOINTS,
+            JOINT_SPEED,
+            JOINT_ACCELERATION,
+        );
         self.follow(|t| Some(trajectory.sample(t)), trajectory.duration(), None)
             .ok();
     }
@@ -341,8 +349,12 @@ impl Workcell {
             CARRY_ACCELERATION
         };
         let trajectory = JointTrajectory::new(self.arm.joints, target, JOINT_SPEED, acceleration);
-        self.follow(|t| Some(trajectory.sample(t)), trajectory.duration(), Some(guard))
-            .map_err(|e| e.unwrap_or_else(|| unreachable!("joint moves have no ik")))
+        self.follow(
+            |t| Some(trajectory.sample(t)),
+            trajectory.duration(),
+            Some(guard),
+        )
+        .map_err(|e| e.unwrap_or_else(|| unreachable!("joint moves have no ik")))
     }
 
     /// A straight line of tool0 from where it is to `target` (same orientation), IK at every step.
@@ -432,7 +444,12 @@ impl Workcell {
 
     /// The first guarded contact, described, if any.
     fn collision(&self, guard: Guard) -> Option<String> {
-        for &c in self.arm.colliders.iter().chain([&self.gripper.palm_collider]) {
+        for &c in self
+            .arm
+            .colliders
+            .iter()
+            .chain([&self.gripper.palm_collider])
+        {
             if self.touches_environment(c, ENVIRONMENT_PENETRATION) {
                 return Some("the arm hit the bin or the ground".into());
             }
@@ -479,7 +496,11 @@ impl Workcell {
 }
 
 fn joint_distance(a: &Joints, b: &Joints) -> f64 {
-    a.iter().zip(b).map(|(x, y)| (x - y).powi(2)).sum::<f64>().sqrt()
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).powi(2))
+        .sum::<f64>()
+        .sqrt()
 }
 
 /// rapier pose (f32, glam) → nalgebra isometry (f64) for the IK.

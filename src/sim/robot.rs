@@ -143,7 +143,11 @@ impl Arm {
         let mut cursor = 0;
         while cursor < order.len() {
             let parent_name = &links[order[cursor]].name;
-            for joint in robot.joints.iter().filter(|j| &j.parent.link == parent_name) {
+            for joint in robot
+                .joints
+                .iter()
+                .filter(|j| &j.parent.link == parent_name)
+            {
                 let child = find_link(&joint.child.link)
                     .with_context(|| format!("joint {} names unknown link", joint.name))?;
                 let [x, y, z] = joint.origin.xyz.0;
@@ -364,7 +368,9 @@ impl Gripper {
     fn command(&self, world: &mut PhysicsWorld, speed: f32) {
         for handle in self.joints {
             if let Some(joint) = world.impulse_joints.get_mut(handle, true) {
-                joint.data.set_motor_velocity(JointAxis::LinX, speed, FINGER_DAMPING);
+                joint
+                    .data
+                    .set_motor_velocity(JointAxis::LinX, speed, FINGER_DAMPING);
                 joint.data.set_motor_max_force(JointAxis::LinX, self.force);
             }
         }
@@ -416,10 +422,21 @@ impl Gripper {
         };
         set(
             self.palm_collider,
-            if enabled { groups::arm() } else { groups::none() },
+            if enabled {
+                groups::arm()
+            } else {
+                groups::none()
+            },
         );
         for h in self.finger_colliders.iter().flatten() {
-            set(*h, if enabled { groups::finger() } else { groups::none() });
+            set(
+                *h,
+                if enabled {
+                    groups::finger()
+                } else {
+                    groups::none()
+                },
+            );
         }
     }
 

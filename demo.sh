@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# The main job on the bundled defaults, until label/train/eval exist: drop each training
+# object into bin 1, save what the camera sees, and let the oracle pick it, with a video of
+# the first attempt. Everything lands in data/demo/.
+set -euo pipefail
+cd "$(dirname "$0")"
+cargo build --release --locked
+bin=target/release/graspmap
+out=data/demo
+mkdir -p "$out"
+objects=$(python3 -c 'import json; print(",".join(json.load(open("assets/objects/split.json"))["train"]))' 2>/dev/null \
+  || echo "YcbHammer,YcbMediumClamp,YcbMustardBottle,YcbPowerDrill,YcbTomatoSoupCan")
+"$bin" scene --objects "$objects" --seed 0 --out "$out/scene.png" --depth "$out/depth.png" --json "$out/scene.json"
+first=1
+for object in ${objects//,/ }; do
+  record=()
+  if [ "$first" = 1 ]; then record=(--record "$out/$object.gif"); first=0; fi
+  "$bin" grasp --object "$object" --seed 1 --oracle --image "$out/$object.png" \
+    --json "$out/$object.json" "${record[@]}"
+done
+echo "results in $out/"
