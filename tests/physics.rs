@@ -108,7 +108,7 @@ fn oracle_lifts_the_clamp() {
     let mut cell = placed(
         "YcbMediumClamp",
         Pose::from_parts(
-            Vector::new(0.55, 0.06, BIN_FLOOR_TOP + 0.016),
+            Vector::new(0.5, 0.0, BIN_FLOOR_TOP + 0.016),
             Rotation::from_rotation_z(0.4),
         ),
     );
@@ -124,7 +124,7 @@ fn oracle_lifts_a_lying_mustard_bottle() {
         "YcbMustardBottle",
         Pose::from_parts(
             Vector::new(0.5, -0.02, BIN_FLOOR_TOP + 0.031),
-            Rotation::from_rotation_z(1.0) * Rotation::from_rotation_x(FRAC_PI_2),
+            Rotation::from_rotation_z(0.3) * Rotation::from_rotation_x(FRAC_PI_2),
         ),
     );
     let outcome = pick_oracle(&mut cell);

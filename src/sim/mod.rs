@@ -543,3 +543,71 @@ fn sphere_points(r: f32, half: f32) -> Vec<Vector> {
     points.extend(ring(r, -half));
     points
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::kinematics::Ur5;
+    use rand::Rng;
+
+    fn assets() -> &'static Path {
+        Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/assets"))
+    }
+
+    #[test]
+    fn urdf_chain_and_closed_form_kinematics_agree() {
+        let cell = Workcell::new(assets(), &WorkcellConfig::default()).unwrap();
+        let ur5 = Ur5::new(pick::to_isometry(&Pose::from_translation(ROBOT_BASE)));
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        for _ in 0..200 {
+            let q: crate::kinematics::Joints =
+                std::array::from_fn(|_| rng.random_range(-3.0..3.0));
+            let urdf = cell.arm.tool0_pose(&q);
+            let dh = ur5.forward(&q);
+            let t = dh.translation.vector;
+            let dh_t = Vector::new(t.x as f32, t.y as f32, t.z as f32);
+            assert!((urdf.translation - dh_t).length() < 1e-4, "{q:?}");
+            let r = dh.rotation;
+            let dh_r = Rotation::from_xyzw(r.i as f32, r.j as f32, r.k as f32, r.w as f32);
+            assert!(urdf.rotation.angle_between(dh_r) < 1e-4, "{q:?}");
+        }
+    }
+
+    #[test]
+    fn home_pose_parks_the_hand_outside_the_camera_view_of_the_bin() {
+        let cell = Workcell::new(assets(), &WorkcellConfig::default()).unwrap();
+        let tool0 = cell.tool0_pose().translation;
+        assert!((tool0 - Vector::new(0.487, 0.109, 0.832)).length() < 0.002);
+        // An empty bin renders with no robot pixels inside the tote's floor area.
+        let frame = cell.capture();
+        let camera = crate::camera::Camera::top_down();
+        let mut floor_pixels = 0;
+        for v in 0..128 {
+            for u in 0..128 {
+                let p = camera.pixel_to_world(u, v, frame.depth_at(u, v));
+                let over_floor = (p.x - BIN1_CENTER.x).abs() < BIN_INNER_HALF[0] - 0.01
+                    && (p.y - BIN1_CENTER.y).abs() < BIN_INNER_HALF[1] - 0.01;
+                if over_floor {
+                    floor_pixels += 1;
+                    assert!(p.z < 0.03, "something above the floor at pixel ({u}, {v}): {p:?}");
+                }
+            }
+        }
+        assert!(floor_pixels > 5000, "only {floor_pixels} pixels see the floor");
+    }
+
+    #[test]
+    fn objects_are_located_by_bin() {
+        let mut cell = Workcell::new(assets(), &WorkcellConfig::default()).unwrap();
+        let library = crate::objects::ObjectLibrary::new(assets().join("objects"));
+        let ball = library.load("YcbTennisBall").unwrap();
+        for (position, expected) in [
+            (Vector::new(0.5, 0.1, 0.06), ObjectLocation::Bin1),
+            (Vector::new(-0.6, -0.2, 0.06), ObjectLocation::Bin2),
+            (Vector::new(0.0, 0.8, 0.04), ObjectLocation::Lost),
+        ] {
+            let i = cell.add_object(&ball, Pose::from_translation(position)).unwrap();
+            assert_eq!(cell.locate(i), expected, "{position:?}");
+        }
+    }
+}
