@@ -560,8 +560,7 @@ mod tests {
         let ur5 = Ur5::new(pick::to_isometry(&Pose::from_translation(ROBOT_BASE)));
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         for _ in 0..200 {
-            let q: crate::kinematics::Joints =
-                std::array::from_fn(|_| rng.random_range(-3.0..3.0));
+            let q: crate::kinematics::Joints = std::array::from_fn(|_| rng.random_range(-3.0..3.0));
             let urdf = cell.arm.tool0_pose(&q);
             let dh = ur5.forward(&q);
             let t = dh.translation.vector;
@@ -589,11 +588,17 @@ mod tests {
                     && (p.y - BIN1_CENTER.y).abs() < BIN_INNER_HALF[1] - 0.01;
                 if over_floor {
                     floor_pixels += 1;
-                    assert!(p.z < 0.03, "something above the floor at pixel ({u}, {v}): {p:?}");
+                    assert!(
+                        p.z < 0.03,
+                        "something above the floor at pixel ({u}, {v}): {p:?}"
+                    );
                 }
             }
         }
-        assert!(floor_pixels > 5000, "only {floor_pixels} pixels see the floor");
+        assert!(
+            floor_pixels > 5000,
+            "only {floor_pixels} pixels see the floor"
+        );
     }
 
     #[test]
@@ -606,7 +611,9 @@ mod tests {
             (Vector::new(-0.6, -0.2, 0.06), ObjectLocation::Bin2),
             (Vector::new(0.0, 0.8, 0.04), ObjectLocation::Lost),
         ] {
-            let i = cell.add_object(&ball, Pose::from_translation(position)).unwrap();
+            let i = cell
+                .add_object(&ball, Pose::from_translation(position))
+                .unwrap();
             assert_eq!(cell.locate(i), expected, "{position:?}");
         }
     }
