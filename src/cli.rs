@@ -47,6 +47,51 @@ pub enum Command {
     Scene(SceneArgs),
     /// Drop one object and run one simulated pick attempt.
     Grasp(GraspArgs),
+    /// Collect verified grasp labels for the training objects (SPEC §6).
+    Label(LabelArgs),
+}
+
+/// `graspmap label`.
+#[derive(Debug, Args)]
+#[command(group = clap::ArgGroup::new("clicker").args(["clicks", "interactive"]))]
+pub struct LabelArgs {
+    /// Successful labels wanted per training object.
+    #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(1..))]
+    pub per_object: u32,
+    /// Rounds allowed per object before giving up on it (an error naming the object).
+    #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_rounds: u32,
+    /// Base seed: round r of training object j drops with seed + 100·j + r.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Take clicks from a JSON list of {"object", "x", "y", "angle"}, in order, one per round.
+    #[arg(long, value_name = "FILE")]
+    pub clicks: Option<PathBuf>,
+    /// Click by hand: the image goes to --preview, commands come from stdin.
+    #[arg(long)]
+    pub interactive: bool,
+    /// Where --interactive writes the image with the cursor's grasp [default: DATA/labels/preview.png].
+    #[arg(long, value_name = "PNG", requires = "interactive")]
+    pub preview: Option<PathBuf>,
+    /// Scripted clicks: standard deviation of the click position noise in pixels.
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    pub click_noise_px: f32,
+    /// Scripted clicks: standard deviation of the angle noise in degrees (before snapping to 22.5°).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    pub angle_noise_deg: f32,
+    /// Delete existing labels and start over.
+    #[arg(long, conflicts_with = "check")]
+    pub force: bool,
+    /// Only validate the existing dataset; exit 2 if anything is wrong.
+    #[arg(long, conflicts_with_all = ["clicks", "interactive"])]
+    pub check: bool,
+}
+
+fn non_negative(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if v >= 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("'{text}' must be a non-negative number")),
+    }
 }
 
 /// `graspmap scene`.
@@ -150,6 +195,7 @@ pub fn run() -> anyhow::Result<()> {
     match cli.command {
         Command::Scene(args) => commands::scene::run(&context, args),
         Command::Grasp(args) => commands::grasp::run(&context, args),
+        Command::Label(args) => commands::label::run(&context, args),
     }
 }
 

@@ -9,6 +9,7 @@ pub mod cli;
 pub mod commands;
 pub mod grasp;
 pub mod kinematics;
+pub mod labels;
 pub mod objects;
 pub mod oracle;
 pub mod output;

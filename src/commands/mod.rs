@@ -1,6 +1,7 @@
 //! Commands: each orchestrates the core, the objects and the simulator, and owns all printing.
 
 pub mod grasp;
+pub mod label;
 pub mod scene;
 
 use std::path::{Path, PathBuf};
