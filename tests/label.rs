@@ -278,15 +278,15 @@ fn bad_clicks_files_fail_before_any_simulation() {
     let good = r#"{"object": "YcbTennisBall", "x": 64, "y": 64, "angle": 0}"#;
     for (text, needle) in [
         (
-            format!(r#"[{{"object": "YcbUnicorn", "x": 1, "y": 2, "angle": 0}}]"#),
+            r#"[{"object": "YcbUnicorn", "x": 1, "y": 2, "angle": 0}]"#.to_owned(),
             "unknown object 'YcbUnicorn'",
         ),
         (
-            format!(r#"[{{"object": "YcbTennisBall", "x": 128, "y": 2, "angle": 0}}]"#),
+            r#"[{"object": "YcbTennisBall", "x": 128, "y": 2, "angle": 0}]"#.to_owned(),
             "\"x\" = 128",
         ),
         (
-            format!(r#"[{{"object": "YcbTennisBall", "x": 1, "y": "top", "angle": 0}}]"#),
+            r#"[{"object": "YcbTennisBall", "x": 1, "y": "top", "angle": 0}]"#.to_owned(),
             "\"y\" = \"top\"",
         ),
         (format!("[{good}]"), "clicks for YcbTennisBall"),
