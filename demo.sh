@@ -1,13 +1,15 @@
 #!/usr/bin/env bash
-# The main job on the bundled defaults, until label/train/eval exist: drop each training
-# object into bin 1, save what the camera sees, and let the oracle pick it, with a video of
-# the first attempt. Everything lands in data/demo/.
+# The main job on the bundled defaults, as far as it exists (train and eval come next):
+# collect the 60 verified grasp labels into data/labels/ (resumes if interrupted), then drop
+# each training object into bin 1, save what the camera sees, and let the oracle pick it, with
+# a video of the first attempt, into data/demo/.
 set -euo pipefail
 cd "$(dirname "$0")"
 cargo build --release --locked
 bin=target/release/graspmap
 out=data/demo
 mkdir -p "$out"
+"$bin" label --json "$out/label.json"
 objects=$(python3 -c 'import json; print(",".join(json.load(open("assets/objects/split.json"))["train"]))' 2>/dev/null \
   || echo "YcbHammer,YcbMediumClamp,YcbMustardBottle,YcbPowerDrill,YcbTomatoSoupCan")
 "$bin" scene --objects "$objects" --seed 0 --out "$out/scene.png" --depth "$out/depth.png" --json "$out/scene.json"
