@@ -76,6 +76,7 @@ impl Labels {
     pub fn iter(&self) -> impl Iterator<Item = (&str, &[Label])> {
         self.entries
             .iter()
+            .filter(|(_, labels)| !labels.is_empty())
             .map(|(name, labels)| (name.as_str(), labels.as_slice()))
     }
 
@@ -87,6 +88,14 @@ impl Labels {
     /// True when there are no labels.
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// Gives `object` a place in the file's order before it has labels: objects keep the order
+    /// they were reserved in, whoever labels first. Objects without labels are not written.
+    pub fn reserve(&mut self, object: &str) {
+        if !self.entries.iter().any(|(name, _)| name == object) {
+            self.entries.push((object.to_owned(), Vec::new()));
+        }
     }
 
     /// Appends a label for `object`; returns its 1-based index k.
@@ -135,6 +144,7 @@ impl Labels {
         let map: serde_json::Map<String, serde_json::Value> = self
             .entries
             .iter()
+            .filter(|(_, labels)| !labels.is_empty())
             .map(|(object, labels)| {
                 let list = labels
                     .iter()

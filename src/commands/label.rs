@@ -3,6 +3,8 @@
 use std::collections::BTreeMap;
 use std::io::{BufRead, IsTerminal};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
 use std::time::Instant;
 
 use anyhow::{bail, Context as _};
@@ -47,7 +49,7 @@ impl Clicker {
 
     /// The click for one round, or why there is none (the round then fails).
     fn click(
-        &mut self,
+        &self,
         object: &str,
         round: u32,
         round_seed: u64,
@@ -145,7 +147,7 @@ pub fn run(context: &Context, args: LabelArgs) -> anyhow::Result<()> {
     }
     let split = context.split()?;
     let models = library.load_all(&split.train)?;
-    let mut clicker = if let Some(path) = &args.clicks {
+    let clicker = if let Some(path) = &args.clicks {
         Clicker::File {
             clicks: read_clicks(path, &split.train)?,
         }
@@ -167,7 +169,7 @@ pub fn run(context: &Context, args: LabelArgs) -> anyhow::Result<()> {
         store.clear()?;
     }
     let mut labels = store.load()?;
-    let mut progress = resume_point(&store, &labels, &args, clicker.name(), &split.train)?;
+    let progress = resume_point(&store, &labels, &args, clicker.name(), &split.train)?;
     if let Clicker::File { clicks } = &clicker {
         check_enough_clicks(clicks, &labels, &progress, &args, &split.train)?;
     }
@@ -180,80 +182,55 @@ pub fn run(context: &Context, args: LabelArgs) -> anyhow::Result<()> {
         wanted,
         labels_in(&labels, &split.train, args.per_object),
     );
-    let camera = Camera::top_down();
-    let config = WorkcellConfig::default();
     let verbose_rounds = !matches!(clicker, Clicker::Scripted { .. });
-    let mut summaries = Vec::new();
-    for (j, (object, model)) in split.train.iter().zip(&models).enumerate() {
-        let mut summary = ObjectSummary {
-            object: object.clone(),
-            ..Default::default()
-        };
-        let mut round = progress.rounds_of(object);
-        while labels.of(object).len() < args.per_object as usize {
-            if round >= args.max_rounds {
-                bar.finish_and_clear();
-                bail!(
-                    "{object}: only {} of {} labels after {round} rounds (--max-rounds {}); raise --max-rounds or check the clicks",
-                    labels.of(object).len(),
-                    args.per_object,
-                    args.max_rounds
-                );
-            }
-            let round_seed = args.seed + 100 * j as u64 + round as u64;
-            bar.set_message(format!(
-                "{object} {}/{} round {round}",
-                labels.of(object).len(),
-                args.per_object
-            ));
-            let mut cell = Workcell::new(context.assets(), &config)?;
-            cell.drop_objects(std::slice::from_ref(model), round_seed)?;
-            let frame = cell.capture();
-            let click = clicker.click(object, round, round_seed, &frame)?;
-            let (reason, detail) = match &click {
-                Ok(grasp) => {
-                    let outcome = cell.pick(&world_grasp(&camera, &frame, *grasp));
-                    (outcome.reason, outcome.detail)
-                }
-                Err(why) => (PickReason::Ungraspable, why.clone()),
-            };
-            let line = match &click {
-                Ok(g) => format!(
-                    "{object} round {round} click ({}, {}, {:.1}°): {} {detail}",
-                    g.u,
-                    g.v,
-                    g.angle_deg,
-                    reason.as_str()
-                ),
-                Err(_) => format!("{object} round {round}: no click: {detail}"),
-            };
-            if let (PickReason::Success, Ok(grasp)) = (reason, &click) {
-                store.append(
-                    &mut labels,
-                    object,
-                    Label::from(*grasp),
-                    &frame.to_rgb_image(),
-                )?;
-                summary.new_labels += 1;
-                bar.inc(1);
-            } else {
-                *summary
-                    .failures
-                    .entry(reason.as_str().to_owned())
-                    .or_default() += 1;
-            }
-            if verbose_rounds || reason != PickReason::Success {
-                bar.suspend(|| context.say(&line));
-            }
-            round += 1;
-            progress.set_rounds(object, round, labels.of(object).len() as u32);
-            store.save_progress(&progress)?;
-        }
-        summary.rounds = round;
-        summary.labels = labels.of(object).len();
-        summaries.push(summary);
+    // Objects are independent (each has its own rounds and seeds), so they run on parallel
+    // workers; the dataset files are written under one lock, in split order, so the result does
+    // not depend on which worker finishes first. A person answers one prompt at a time.
+    let workers = if args.interactive {
+        1
+    } else {
+        (context.threads as usize).min(split.train.len()).max(1)
+    };
+    let mut progress = progress;
+    for object in &split.train {
+        labels.reserve(object);
+        let (rounds, recorded) = progress.entry(object);
+        progress.set_rounds(object, rounds, recorded);
     }
+    let shared = Mutex::new(Shared { labels, progress });
+    let next = AtomicUsize::new(0);
+    let failed = AtomicBool::new(false);
+    let outcomes: Mutex<Vec<Option<anyhow::Result<ObjectSummary>>>> =
+        Mutex::new((0..split.train.len()).map(|_| None).collect());
+    let job = ObjectJob {
+        context,
+        args: &args,
+        store: &store,
+        clicker: &clicker,
+        bar: &bar,
+        verbose_rounds,
+        stop: &failed,
+    };
+    std::thread::scope(|scope| {
+        for _ in 0..workers {
+            scope.spawn(|| loop {
+                let j = next.fetch_add(1, Ordering::SeqCst);
+                if j >= split.train.len() || failed.load(Ordering::SeqCst) {
+                    break;
+                }
+                let outcome = job.label_object(j, &split.train[j], &models[j], &shared);
+                if outcome.is_err() {
+                    failed.store(true, Ordering::SeqCst);
+                }
+                lock(&outcomes)[j] = Some(outcome);
+            });
+        }
+    });
     bar.finish_and_clear();
+    let mut summaries = Vec::new();
+    for outcome in lock(&outcomes).drain(..).flatten() {
+        summaries.push(outcome?);
+    }
 
     let results = LabelResults {
         labels_dir: store.dir().display().to_string(),
@@ -278,6 +255,123 @@ pub fn run(context: &Context, args: LabelArgs) -> anyhow::Result<()> {
         write_report(json, "label", args.seed, &resolved, &results)?;
     }
     Ok(())
+}
+
+/// Dataset state shared by the workers.
+struct Shared {
+    labels: Labels,
+    progress: Progress,
+}
+
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    // A worker that panicked mid-write has already lost its round; the files on disk are
+    // whole (atomic renames), so the state is still usable.
+    mutex
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// What every worker needs to label one object.
+struct ObjectJob<'a> {
+    context: &'a Context,
+    args: &'a LabelArgs,
+    store: &'a LabelStore,
+    clicker: &'a Clicker,
+    bar: &'a indicatif::ProgressBar,
+    verbose_rounds: bool,
+    stop: &'a AtomicBool,
+}
+
+impl ObjectJob<'_> {
+    /// Runs rounds for training object `j` until it has its labels.
+    fn label_object(
+        &self,
+        j: usize,
+        object: &str,
+        model: &crate::objects::ObjectModel,
+        shared: &Mutex<Shared>,
+    ) -> anyhow::Result<ObjectSummary> {
+        let args = self.args;
+        let camera = Camera::top_down();
+        let config = WorkcellConfig::default();
+        let mut summary = ObjectSummary {
+            object: object.to_owned(),
+            ..Default::default()
+        };
+        let (mut round, mut have) = {
+            let state = lock(shared);
+            (
+                state.progress.rounds_of(object),
+                state.labels.of(object).len(),
+            )
+        };
+        while have < args.per_object as usize {
+            if self.stop.load(Ordering::SeqCst) {
+                // Another object failed; this one resumes on the next run.
+                break;
+            }
+            if round >= args.max_rounds {
+                bail!(
+                    "{object}: only {have} of {} labels after {round} rounds (--max-rounds {}); raise --max-rounds or check the clicks",
+                    args.per_object,
+                    args.max_rounds
+                );
+            }
+            let round_seed = args.seed + 100 * j as u64 + round as u64;
+            self.bar
+                .set_message(format!("{object} {have}/{} round {round}", args.per_object));
+            let mut cell = Workcell::new(self.context.assets(), &config)?;
+            cell.drop_objects(std::slice::from_ref(model), round_seed)?;
+            let frame = cell.capture();
+            let click = self.clicker.click(object, round, round_seed, &frame)?;
+            let (reason, detail) = match &click {
+                Ok(grasp) => {
+                    let outcome = cell.pick(&world_grasp(&camera, &frame, *grasp));
+                    (outcome.reason, outcome.detail)
+                }
+                Err(why) => (PickReason::Ungraspable, why.clone()),
+            };
+            let line = match &click {
+                Ok(g) => format!(
+                    "{object} round {round} click ({}, {}, {:.1}°): {} {detail}",
+                    g.u,
+                    g.v,
+                    g.angle_deg,
+                    reason.as_str()
+                ),
+                Err(_) => format!("{object} round {round}: no click: {detail}"),
+            };
+            round += 1;
+            {
+                let mut state = lock(shared);
+                let Shared { labels, progress } = &mut *state;
+                if let (PickReason::Success, Ok(grasp)) = (reason, &click) {
+                    self.store.append(
+                        labels,
+                        object,
+                        Label::from(*grasp),
+                        &frame.to_rgb_image(),
+                    )?;
+                    summary.new_labels += 1;
+                    self.bar.inc(1);
+                } else {
+                    *summary
+                        .failures
+                        .entry(reason.as_str().to_owned())
+                        .or_default() += 1;
+                }
+                have = labels.of(object).len();
+                progress.set_rounds(object, round, have as u32);
+                self.store.save_progress(progress)?;
+            }
+            if self.verbose_rounds || reason != PickReason::Success {
+                self.bar.suspend(|| self.context.say(&line));
+            }
+        }
+        summary.rounds = round;
+        summary.labels = have;
+        Ok(summary)
+    }
 }
 
 fn labels_in(labels: &Labels, objects: &[String], cap: u32) -> u64 {
