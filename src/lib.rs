@@ -8,6 +8,7 @@ pub mod augment;
 pub mod camera;
 pub mod cli;
 pub mod commands;
+pub mod dataset;
 pub mod grasp;
 pub mod kinematics;
 pub mod labels;
