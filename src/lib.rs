@@ -4,9 +4,11 @@
 //! no I/O; `urdf` and `objects` read model files; `sim` is the rapier workcell; `commands` and
 //! `cli` orchestrate.
 
+pub mod augment;
 pub mod camera;
 pub mod cli;
 pub mod commands;
+pub mod dataset;
 pub mod grasp;
 pub mod kinematics;
 pub mod labels;
