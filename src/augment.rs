@@ -44,7 +44,7 @@ pub fn grasp_from_fingers(f: [[f32; 2]; 2]) -> ([f32; 2], f32) {
 }
 
 /// Random affine augmentation of a training sample (SPEC §7, the reference's imgaug settings).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct AugmentConfig {
     /// Chance that a sample is augmented at all; otherwise it passes through unchanged. Default 0.7.
     pub probability: f64,
