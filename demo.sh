@@ -4,6 +4,7 @@
 # the first attempt. Everything lands in data/demo/.
 set -euo pipefail
 cd "$(dirname "$0")"
+scripts/setup-libtorch.sh
 cargo build --release --locked
 bin=target/release/graspmap
 out=data/demo
