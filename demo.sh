@@ -5,6 +5,7 @@
 # a video of the first attempt, into data/demo/.
 set -euo pipefail
 cd "$(dirname "$0")"
+scripts/setup-libtorch.sh
 cargo build --release --locked
 bin=target/release/graspmap
 out=data/demo
