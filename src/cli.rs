@@ -49,6 +49,28 @@ pub enum Command {
     Grasp(GraspArgs),
     /// Collect verified grasp labels for the training objects (SPEC §6).
     Label(LabelArgs),
+    /// Train the affordance model on the labels (SPEC §7).
+    Train(TrainArgs),
+}
+
+/// `graspmap train`.
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// Epochs to train (30 is usually enough).
+    #[arg(long, default_value_t = 101, value_parser = clap::value_parser!(u32).range(1..))]
+    pub epochs: u32,
+    /// Images per optimiser step.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..))]
+    pub batch_size: u32,
+    /// Initial Adam learning rate.
+    #[arg(long, default_value_t = 1e-3)]
+    pub lr: f64,
+    /// Seed of the 90/10 split, initial weights, data order and augmentation.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Continue from DATA/affordance/last.* exactly where it stopped.
+    #[arg(long)]
+    pub resume: bool,
 }
 
 /// `graspmap label`.
@@ -196,6 +218,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Scene(args) => commands::scene::run(&context, args),
         Command::Grasp(args) => commands::grasp::run(&context, args),
         Command::Label(args) => commands::label::run(&context, args),
+        Command::Train(args) => commands::train::run(&context, args),
     }
 }
 

@@ -220,6 +220,23 @@ impl LabelStore {
         self.dir.join(format!("{object}_{k}_rgb.png"))
     }
 
+    /// Deletes temporary files a killed run left behind (they are never read, but would
+    /// otherwise pile up beside the dataset).
+    pub fn remove_stale_temporaries(&self) -> anyhow::Result<()> {
+        let Ok(entries) = std::fs::read_dir(&self.dir) else {
+            return Ok(());
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name();
+            let name = name.to_string_lossy();
+            if name.starts_with('.') && name.contains(".tmp-") {
+                std::fs::remove_file(entry.path())
+                    .with_context(|| format!("removing {}", entry.path().display()))?;
+            }
+        }
+        Ok(())
+    }
+
     /// Reads labels.json; an absent file is an empty dataset.
     pub fn load(&self) -> anyhow::Result<Labels> {
         let path = self.labels_path();

@@ -1,7 +1,7 @@
 //! graspmap: learn top-down grasps for a simulated UR5 from a few dozen labels (spatial action maps).
 //!
-//! Layers, one way only: the pure core (`camera`, `render`, `grasp`, `kinematics`, `oracle`) does
-//! no I/O; `urdf` and `objects` read model files; `sim` is the rapier workcell; `commands` and
+//! Layers, one way only: the pure core (`camera`, `render`, `grasp`, `kinematics`, `oracle`,
+//! `augment`) does no I/O; `unet` and `train` are the model (tch, no rapier); `urdf` and `objects` read model files; `sim` is the rapier workcell; `commands` and
 //! `cli` orchestrate.
 
 pub mod augment;
@@ -18,4 +18,6 @@ pub mod output;
 pub mod raycast;
 pub mod render;
 pub mod sim;
+pub mod train;
+pub mod unet;
 pub mod urdf;

@@ -1298,7 +1298,11 @@ pub fn viridis(value: f32) -> [u8; 3] {
         [189.0, 223.0, 38.0],
         [253.0, 231.0, 37.0],
     ];
-    let v = if value.is_finite() { value.clamp(0.0, 1.0) } else { 0.0 };
+    let v = if value.is_finite() {
+        value.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let x = v * (STOPS.len() - 1) as f32;
     let i = (x.floor() as usize).min(STOPS.len() - 2);
     let t = x - i as f32;

@@ -168,6 +168,7 @@ pub fn run(context: &Context, args: LabelArgs) -> anyhow::Result<()> {
     if args.force {
         store.clear()?;
     }
+    store.remove_stale_temporaries()?;
     let mut labels = store.load()?;
     let progress = resume_point(&store, &labels, &args, clicker.name(), &split.train)?;
     if let Clicker::File { clicks } = &clicker {

@@ -3,6 +3,7 @@
 pub mod grasp;
 pub mod label;
 pub mod scene;
+pub mod train;
 
 use std::path::{Path, PathBuf};
 

@@ -1,0 +1,266 @@
+//! `graspmap train`: fit the MiniUNet to the labels, with best/last checkpoints, per-epoch visualisations and exact resume.
+
+use std::io::IsTerminal;
+use std::path::Path;
+use std::time::Instant;
+
+use anyhow::{bail, Context as _};
+use tch::nn;
+
+use super::Context;
+use crate::augment::AugmentConfig;
+use crate::cli::TrainArgs;
+use crate::dataset::{load_dataset, split_train_validation, training_sample, LabelledImage};
+use crate::labels::{LabelStore, IMAGE_SIZE};
+use crate::output::{save_image_atomic, write_atomic, write_report};
+use crate::train::{
+    read_checkpoint, save_checkpoint, train_epoch, validate, Adam, CheckpointMeta, EpochRecord,
+    Plateau, TrainConfig,
+};
+use crate::unet::MiniUNet;
+
+#[derive(Debug, serde::Serialize)]
+struct TrainResults {
+    labels: usize,
+    train_samples: usize,
+    val_samples: usize,
+    epochs_run: u32,
+    best_epoch: u32,
+    best_val_loss: f64,
+    final_train_loss: f64,
+    final_val_loss: f64,
+    wall_seconds: f64,
+    checkpoint: String,
+}
+
+/// Runs the command.
+pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
+    let config = TrainConfig {
+        epochs: args.epochs,
+        batch_size: args.batch_size as usize,
+        lr: args.lr,
+        seed: args.seed,
+        ..TrainConfig::default()
+    };
+    if !(config.lr > 0.0 && config.lr.is_finite()) {
+        bail!("--lr {} must be a positive number", config.lr);
+    }
+    tch::set_num_threads(context.threads as i32);
+    tch::manual_seed(config.seed as i64);
+    let store = LabelStore::new(context.data.join("labels"));
+    let images = load_dataset(&store)?;
+    if images.len() < 2 {
+        bail!(
+            "{} has {} labels; training needs at least 2 (run graspmap label first)",
+            store.dir().display(),
+            images.len()
+        );
+    }
+    let out_dir = context.data.join("affordance");
+    let mut vs = nn::VarStore::new(tch::Device::Cpu);
+    let net = MiniUNet::new(&vs.root());
+    let mut adam = Adam::new(&vs, config.lr);
+
+    let mut meta = if args.resume {
+        let (tensors, mut meta) = read_checkpoint(&out_dir, "last")?;
+        if meta.config.seed != config.seed
+            || meta.config.batch_size != config.batch_size
+            || meta.config.lr != config.lr
+        {
+            bail!(
+                "{} was trained with --seed {} --batch-size {} --lr {}; resume with the same values",
+                out_dir.join("last.json").display(),
+                meta.config.seed,
+                meta.config.batch_size,
+                meta.config.lr
+            );
+        }
+        let known = meta.train_indices.len() + meta.val_indices.len();
+        if known != images.len() {
+            bail!(
+                "the labels changed since {} ({} images then, {} now); train from scratch",
+                out_dir.join("last.json").display(),
+                known,
+                images.len()
+            );
+        }
+        crate::train::load_weights(&mut vs, &tensors, &out_dir.join("last.safetensors"))?;
+        adam.restore(&tensors, meta.adam_steps)?;
+        adam.lr = meta.lr;
+        meta.config.epochs = config.epochs;
+        meta
+    } else {
+        let (train_indices, val_indices) = split_train_validation(images.len(), config.seed);
+        CheckpointMeta {
+            schema: CheckpointMeta::SCHEMA.to_owned(),
+            config: config.clone(),
+            epoch: 0,
+            history: Vec::new(),
+            best_val_loss: f64::INFINITY,
+            best_epoch: 0,
+            lr: config.lr,
+            plateau: Plateau::default(),
+            adam_steps: 0,
+            train_indices,
+            val_indices,
+        }
+    };
+    if meta.epoch >= config.epochs {
+        context.say(&format!(
+            "already trained {} epochs (--epochs {}); nothing to do",
+            meta.epoch, config.epochs
+        ));
+    }
+
+    let start = Instant::now();
+    let augment = AugmentConfig::default();
+    let bar = epoch_bar(context, config.epochs as u64, meta.epoch as u64);
+    let vis_dir = out_dir.join("training_vis");
+    while meta.epoch < config.epochs {
+        let epoch = meta.epoch + 1;
+        let epoch_start = Instant::now();
+        let batches = meta.train_indices.len().div_ceil(config.batch_size);
+        let train_loss = train_epoch(
+            &net,
+            &mut adam,
+            &images,
+            &meta.train_indices,
+            &config,
+            epoch,
+            &augment,
+            |b, loss| {
+                bar.set_message(format!(
+                    "epoch {epoch} batch {}/{batches} loss {loss:.5}",
+                    b + 1
+                ))
+            },
+        );
+        let val_loss = validate(&net, &images, &meta.val_indices, config.batch_size);
+        meta.history.push(EpochRecord {
+            epoch,
+            train_loss,
+            val_loss,
+            lr: adam.lr,
+            seconds: epoch_start.elapsed().as_secs_f64(),
+        });
+        adam.lr = meta.plateau.update(val_loss, adam.lr, &config);
+        meta.epoch = epoch;
+        meta.lr = adam.lr;
+        meta.adam_steps = adam.steps();
+        let improved = val_loss < meta.best_val_loss;
+        if improved {
+            meta.best_val_loss = val_loss;
+            meta.best_epoch = epoch;
+            save_checkpoint(&vs, &[], &meta, &out_dir, "best")?;
+        }
+        save_checkpoint(&vs, &adam.named_state(), &meta, &out_dir, "last")?;
+        write_losses_csv(&out_dir.join("losses.csv"), &meta.history)?;
+        if let Some(&first) = meta.val_indices.first() {
+            save_training_vis(&net, &images[first], &vis_dir, epoch)?;
+        }
+        bar.inc(1);
+        bar.suspend(|| {
+            if !context.quiet {
+                eprintln!(
+                    "epoch {epoch:>3}: train {train_loss:.5}  val {val_loss:.5}  lr {:.0e}{}",
+                    meta.history.last().map_or(0.0, |r| r.lr),
+                    if improved { "  best" } else { "" }
+                );
+            }
+        });
+    }
+    bar.finish_and_clear();
+
+    let last = meta.history.last();
+    let results = TrainResults {
+        labels: images.len(),
+        train_samples: meta.train_indices.len(),
+        val_samples: meta.val_indices.len(),
+        epochs_run: meta.epoch,
+        best_epoch: meta.best_epoch,
+        best_val_loss: meta.best_val_loss,
+        final_train_loss: last.map_or(f64::NAN, |r| r.train_loss),
+        final_val_loss: last.map_or(f64::NAN, |r| r.val_loss),
+        wall_seconds: start.elapsed().as_secs_f64(),
+        checkpoint: out_dir.join("best.safetensors").display().to_string(),
+    };
+    context.say(&format!(
+        "trained {} epochs on {} labels ({} train / {} validation): best validation loss {:.5} at epoch {} -> {} ({:.1} s)",
+        results.epochs_run,
+        results.labels,
+        results.train_samples,
+        results.val_samples,
+        results.best_val_loss,
+        results.best_epoch,
+        results.checkpoint,
+        results.wall_seconds
+    ));
+    if let Some(json) = &context.json {
+        let resolved = serde_json::json!({
+            "global": context,
+            "train": config,
+            "augment": augment,
+            "resume": args.resume,
+        });
+        write_report(json, "train", config.seed, &resolved, &results)?;
+    }
+    Ok(())
+}
+
+fn epoch_bar(context: &Context, len: u64, done: u64) -> indicatif::ProgressBar {
+    if context.quiet || !std::io::stderr().is_terminal() {
+        return indicatif::ProgressBar::hidden();
+    }
+    let bar = indicatif::ProgressBar::new(len);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(
+            "{bar:30} {pos}/{len} epochs  {msg}  [{elapsed_precise}, ETA {eta}]",
+        )
+        .expect("the template is valid"),
+    );
+    bar.set_position(done);
+    bar
+}
+
+fn write_losses_csv(path: &Path, history: &[EpochRecord]) -> anyhow::Result<()> {
+    let mut text = String::from("epoch,train_loss,val_loss,lr,seconds\n");
+    for r in history {
+        text.push_str(&format!(
+            "{},{:.8},{:.8},{:e},{:.3}\n",
+            r.epoch, r.train_loss, r.val_loss, r.lr, r.seconds
+        ));
+    }
+    write_atomic(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))
+}
+
+/// input | prediction | target, 128 × 384 (SPEC §7), for one fixed validation image.
+fn save_training_vis(
+    net: &MiniUNet,
+    item: &LabelledImage,
+    dir: &Path,
+    epoch: u32,
+) -> anyhow::Result<()> {
+    let sample = training_sample(item, None);
+    let prediction = crate::train::predict_map(net, &sample);
+    let size = IMAGE_SIZE;
+    let mut image = image::RgbImage::new(size * 3, size);
+    for y in 0..size {
+        for x in 0..size {
+            let i = (y * size + x) as usize;
+            let plane = (size * size) as usize;
+            let rgb = [0, 1, 2].map(|c| (sample.input[c * plane + i] * 255.0).round() as u8);
+            image.put_pixel(x, y, image::Rgb(rgb));
+            image.put_pixel(
+                size + x,
+                y,
+                image::Rgb(crate::render::viridis(prediction[i])),
+            );
+            image.put_pixel(
+                2 * size + x,
+                y,
+                image::Rgb(crate::render::viridis(sample.target[i])),
+            );
+        }
+    }
+    save_image_atomic(&image, &dir.join(format!("{epoch:03}.png")))
+}

@@ -1,0 +1,437 @@
+//! Training the affordance model (SPEC §7): Adam with our own moment tensors, LR reduction on plateau, exact resume.
+//!
+//! tch's optimiser cannot export its moments, so Adam lives here as plain tensors; together
+//! with the step count, the schedule state and per-epoch seeded data order, `last.*` holds
+//! everything needed to continue a run exactly where it stopped.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use serde::{Deserialize, Serialize};
+use tch::nn::{self, Module};
+use tch::{Device, Kind, Reduction, Tensor};
+
+use crate::augment::AugmentConfig;
+use crate::dataset::{training_sample, LabelledImage, Sample};
+use crate::output::write_atomic;
+use crate::unet::MiniUNet;
+
+/// Training settings (SPEC §7 defaults).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainConfig {
+    /// Epochs to run (101).
+    pub epochs: u32,
+    /// Images per optimiser step (8).
+    pub batch_size: usize,
+    /// Initial Adam learning rate (1e-3).
+    pub lr: f64,
+    /// Seed of the split, the initial weights, the data order and the augmentation.
+    pub seed: u64,
+    /// Multiply the LR by this after `patience` epochs without validation improvement (0.1).
+    pub lr_factor: f64,
+    /// Epochs without improvement before the LR drops (3).
+    pub patience: u32,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        Self {
+            epochs: 101,
+            batch_size: 8,
+            lr: 1e-3,
+            seed: 0,
+            lr_factor: 0.1,
+            patience: 3,
+        }
+    }
+}
+
+/// Adam (β 0.9/0.999, ε 1e-8, no weight decay), PyTorch's update rule.
+pub struct Adam {
+    /// Current learning rate.
+    pub lr: f64,
+    step: i64,
+    names: Vec<String>,
+    params: Vec<Tensor>,
+    exp_avg: Vec<Tensor>,
+    exp_avg_sq: Vec<Tensor>,
+}
+
+const BETA1: f64 = 0.9;
+const BETA2: f64 = 0.999;
+const EPSILON: f64 = 1e-8;
+
+impl Adam {
+    /// Adam over every variable of `vs`, in name order.
+    pub fn new(vs: &nn::VarStore, lr: f64) -> Self {
+        let vars: BTreeMap<String, Tensor> = vs.variables().into_iter().collect();
+        let names: Vec<String> = vars.keys().cloned().collect();
+        let params: Vec<Tensor> = vars.into_values().collect();
+        let exp_avg = params.iter().map(|p| p.zeros_like()).collect();
+        let exp_avg_sq = params.iter().map(|p| p.zeros_like()).collect();
+        Self {
+            lr,
+            step: 0,
+            names,
+            params,
+            exp_avg,
+            exp_avg_sq,
+        }
+    }
+
+    /// One update from the gradients in the parameters; then clears them.
+    pub fn step(&mut self) {
+        self.step += 1;
+        let bias1 = 1.0 - BETA1.powi(self.step as i32);
+        let bias2 = 1.0 - BETA2.powi(self.step as i32);
+        tch::no_grad(|| {
+            for ((p, m), v) in self
+                .params
+                .iter_mut()
+                .zip(&mut self.exp_avg)
+                .zip(&mut self.exp_avg_sq)
+            {
+                let grad = p.grad();
+                if !grad.defined() {
+                    continue;
+                }
+                let _ = m.g_mul_scalar_(BETA1).g_add_(&(&grad * (1.0 - BETA1)));
+                let _ = v
+                    .g_mul_scalar_(BETA2)
+                    .g_add_(&(&grad * &grad * (1.0 - BETA2)));
+                let denom = (v.sqrt() / bias2.sqrt()) + EPSILON;
+                let update = m.divide(&denom) * (self.lr / bias1);
+                let _ = p.g_sub_(&update);
+                p.zero_grad();
+            }
+        });
+    }
+
+    /// Optimiser steps taken.
+    pub fn steps(&self) -> i64 {
+        self.step
+    }
+
+    /// The moment tensors, named after their parameters.
+    pub fn named_state(&self) -> Vec<(String, Tensor)> {
+        self.names
+            .iter()
+            .zip(&self.exp_avg)
+            .map(|(n, t)| (format!("optimizer.exp_avg.{n}"), t.shallow_clone()))
+            .chain(
+                self.names
+                    .iter()
+                    .zip(&self.exp_avg_sq)
+                    .map(|(n, t)| (format!("optimizer.exp_avg_sq.{n}"), t.shallow_clone())),
+            )
+            .collect()
+    }
+
+    /// Restores moments and step count saved by [`Adam::named_state`].
+    pub fn restore(
+        &mut self,
+        tensors: &BTreeMap<String, Tensor>,
+        steps: i64,
+    ) -> anyhow::Result<()> {
+        for (i, name) in self.names.iter().enumerate() {
+            for (prefix, slot) in [
+                ("optimizer.exp_avg.", &mut self.exp_avg[i]),
+                ("optimizer.exp_avg_sq.", &mut self.exp_avg_sq[i]),
+            ] {
+                let key = format!("{prefix}{name}");
+                let saved = tensors
+                    .get(&key)
+                    .with_context(|| format!("the checkpoint has no {key}"))?;
+                if saved.size() != slot.size() {
+                    bail!(
+                        "{key} has shape {:?}, expected {:?}",
+                        saved.size(),
+                        slot.size()
+                    );
+                }
+                tch::no_grad(|| slot.copy_(saved));
+            }
+        }
+        self.step = steps;
+        Ok(())
+    }
+}
+
+/// ReduceLROnPlateau in PyTorch's default mode: relative threshold 1e-4.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plateau {
+    /// Best validation loss so far.
+    pub best: f64,
+    /// Epochs since it improved.
+    pub bad_epochs: u32,
+}
+
+impl Default for Plateau {
+    fn default() -> Self {
+        Self {
+            best: f64::INFINITY,
+            bad_epochs: 0,
+        }
+    }
+}
+
+impl Plateau {
+    /// Feeds one epoch's validation loss; returns the new learning rate.
+    pub fn update(&mut self, loss: f64, lr: f64, config: &TrainConfig) -> f64 {
+        if loss < self.best * (1.0 - 1e-4) {
+            self.best = loss;
+            self.bad_epochs = 0;
+            lr
+        } else {
+            self.bad_epochs += 1;
+            if self.bad_epochs > config.patience {
+                self.bad_epochs = 0;
+                lr * config.lr_factor
+            } else {
+                lr
+            }
+        }
+    }
+}
+
+/// One epoch's record.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EpochRecord {
+    /// 1-based epoch.
+    pub epoch: u32,
+    /// Mean training loss (BCE with logits).
+    pub train_loss: f64,
+    /// Mean validation loss.
+    pub val_loss: f64,
+    /// Learning rate used in the epoch.
+    pub lr: f64,
+    /// Wall seconds of the epoch.
+    pub seconds: f64,
+}
+
+/// The JSON sidecar of a checkpoint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CheckpointMeta {
+    /// `graspmap.checkpoint/1`.
+    pub schema: String,
+    /// Settings of the run.
+    pub config: TrainConfig,
+    /// Epochs completed.
+    pub epoch: u32,
+    /// Every epoch so far.
+    pub history: Vec<EpochRecord>,
+    /// Best validation loss and its epoch.
+    pub best_val_loss: f64,
+    /// Epoch of the best validation loss.
+    pub best_epoch: u32,
+    /// Learning rate for the next epoch.
+    pub lr: f64,
+    /// LR schedule state.
+    pub plateau: Plateau,
+    /// Adam steps taken.
+    pub adam_steps: i64,
+    /// Indices (into the labelled images) used for training and validation.
+    pub train_indices: Vec<usize>,
+    /// Validation indices.
+    pub val_indices: Vec<usize>,
+}
+
+impl CheckpointMeta {
+    /// The schema name.
+    pub const SCHEMA: &'static str = "graspmap.checkpoint/1";
+}
+
+/// Paths of a checkpoint pair.
+pub fn checkpoint_paths(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
+    (
+        dir.join(format!("{name}.safetensors")),
+        dir.join(format!("{name}.json")),
+    )
+}
+
+/// Writes weights (plus any extra tensors) and the sidecar, each through a temporary file.
+pub fn save_checkpoint(
+    vs: &nn::VarStore,
+    extra: &[(String, Tensor)],
+    meta: &CheckpointMeta,
+    dir: &Path,
+    name: &str,
+) -> anyhow::Result<()> {
+    let (weights, sidecar) = checkpoint_paths(dir, name);
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    let mut named: Vec<(String, Tensor)> = vs
+        .variables()
+        .into_iter()
+        .map(|(n, t)| (n, t.contiguous()))
+        .collect();
+    named.extend(extra.iter().map(|(n, t)| (n.clone(), t.contiguous())));
+    named.sort_by(|a, b| a.0.cmp(&b.0));
+    let tmp = dir.join(format!(".{name}.safetensors.tmp-{}", std::process::id()));
+    Tensor::write_safetensors(&named, &tmp)
+        .with_context(|| format!("writing {}", tmp.display()))?;
+    std::fs::rename(&tmp, &weights).with_context(|| format!("replacing {}", weights.display()))?;
+    let mut text = serde_json::to_string_pretty(meta)?;
+    text.push('\n');
+    write_atomic(&sidecar, text.as_bytes())
+}
+
+/// Reads a checkpoint's tensors and sidecar, with errors that name the file and the fix.
+pub fn read_checkpoint(
+    dir: &Path,
+    name: &str,
+) -> anyhow::Result<(BTreeMap<String, Tensor>, CheckpointMeta)> {
+    let (weights, sidecar) = checkpoint_paths(dir, name);
+    let text = std::fs::read_to_string(&sidecar).with_context(|| {
+        format!(
+            "reading {} (train first, or check --data)",
+            sidecar.display()
+        )
+    })?;
+    let meta: CheckpointMeta = serde_json::from_str(&text)
+        .with_context(|| format!("{} is corrupt (delete it and retrain)", sidecar.display()))?;
+    if meta.schema != CheckpointMeta::SCHEMA {
+        bail!(
+            "{} has schema '{}', expected '{}'",
+            sidecar.display(),
+            meta.schema,
+            CheckpointMeta::SCHEMA
+        );
+    }
+    let tensors = Tensor::read_safetensors(&weights)
+        .with_context(|| format!("{} is missing or corrupt (retrain)", weights.display()))?
+        .into_iter()
+        .collect();
+    Ok((tensors, meta))
+}
+
+/// Copies the model's weights out of a checkpoint's tensors.
+pub fn load_weights(
+    vs: &mut nn::VarStore,
+    tensors: &BTreeMap<String, Tensor>,
+    source: &Path,
+) -> anyhow::Result<()> {
+    for (name, mut var) in vs.variables() {
+        let saved = tensors
+            .get(&name)
+            .with_context(|| format!("{} has no tensor '{name}'", source.display()))?;
+        if saved.size() != var.size() {
+            bail!(
+                "{}: '{name}' has shape {:?}, the model needs {:?}",
+                source.display(),
+                saved.size(),
+                var.size()
+            );
+        }
+        tch::no_grad(|| var.copy_(&saved.to_kind(var.kind())));
+    }
+    Ok(())
+}
+
+/// Stacks samples into an input batch N×3×H×W and a target batch N×1×H×W.
+pub fn batch(samples: &[Sample], size: i64) -> (Tensor, Tensor) {
+    let n = samples.len() as i64;
+    let inputs: Vec<f32> = samples
+        .iter()
+        .flat_map(|s| s.input.iter().copied())
+        .collect();
+    let targets: Vec<f32> = samples
+        .iter()
+        .flat_map(|s| s.target.iter().copied())
+        .collect();
+    (
+        Tensor::from_slice(&inputs).view([n, 3, size, size]),
+        Tensor::from_slice(&targets).view([n, 1, size, size]),
+    )
+}
+
+/// Mean BCE-with-logits of a batch.
+pub fn loss(net: &MiniUNet, input: &Tensor, target: &Tensor) -> Tensor {
+    net.forward(input)
+        .binary_cross_entropy_with_logits::<Tensor>(target, None, None, Reduction::Mean)
+}
+
+/// The per-epoch RNG: a pure function of the seed and the epoch, so a resumed run draws the
+/// same data order and augmentations as an uninterrupted one.
+pub fn epoch_rng(seed: u64, epoch: u32) -> ChaCha8Rng {
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(1000 + epoch as u64);
+    rng
+}
+
+/// Trains one epoch; returns the mean training loss.
+pub fn train_epoch(
+    net: &MiniUNet,
+    adam: &mut Adam,
+    images: &[LabelledImage],
+    train_indices: &[usize],
+    config: &TrainConfig,
+    epoch: u32,
+    augment: &AugmentConfig,
+    mut on_batch: impl FnMut(usize, f64),
+) -> f64 {
+    let mut rng = epoch_rng(config.seed, epoch);
+    let mut order = train_indices.to_vec();
+    order.shuffle(&mut rng);
+    let mut total = 0.0;
+    let mut count = 0usize;
+    for (b, chunk) in order.chunks(config.batch_size).enumerate() {
+        let samples: Vec<Sample> = chunk
+            .iter()
+            .map(|&i| training_sample(&images[i], Some((augment, &mut rng))))
+            .collect();
+        let (input, target) = batch(&samples, crate::labels::IMAGE_SIZE as i64);
+        let l = loss(net, &input.to_device(Device::Cpu), &target);
+        l.backward();
+        adam.step();
+        let value = l.double_value(&[]);
+        total += value * chunk.len() as f64;
+        count += chunk.len();
+        on_batch(b, value);
+    }
+    total / count.max(1) as f64
+}
+
+/// Mean validation loss over unaugmented samples.
+pub fn validate(
+    net: &MiniUNet,
+    images: &[LabelledImage],
+    indices: &[usize],
+    batch_size: usize,
+) -> f64 {
+    tch::no_grad(|| {
+        let mut total = 0.0;
+        for chunk in indices.chunks(batch_size) {
+            let samples: Vec<Sample> = chunk
+                .iter()
+                .map(|&i| training_sample(&images[i], None))
+                .collect();
+            let (input, target) = batch(&samples, crate::labels::IMAGE_SIZE as i64);
+            total += loss(net, &input, &target).double_value(&[]) * chunk.len() as f64;
+        }
+        total / indices.len().max(1) as f64
+    })
+}
+
+/// The predicted affordance (sigmoid) for one sample, H×W in [0, 1].
+pub fn predict_map(net: &MiniUNet, sample: &Sample) -> Vec<f32> {
+    tch::no_grad(|| {
+        let (input, _) = batch(
+            std::slice::from_ref(sample),
+            crate::labels::IMAGE_SIZE as i64,
+        );
+        let out = net
+            .forward(&input)
+            .sigmoid()
+            .to_kind(Kind::Float)
+            .flatten(0, -1);
+        Vec::<f32>::try_from(out).expect("a float tensor converts to Vec<f32>")
+    })
+}
