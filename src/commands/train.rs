@@ -15,7 +15,7 @@ use crate::labels::{LabelStore, IMAGE_SIZE};
 use crate::output::{save_image_atomic, write_atomic, write_report};
 use crate::train::{
     read_checkpoint, save_checkpoint, train_epoch, validate, Adam, CheckpointMeta, EpochRecord,
-    Plateau, TrainConfig,
+    Plateau, Subset, TrainConfig,
 };
 use crate::unet::MiniUNet;
 
@@ -123,8 +123,10 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
         let train_loss = train_epoch(
             &net,
             &mut adam,
-            &images,
-            &meta.train_indices,
+            Subset {
+                images: &images,
+                indices: &meta.train_indices,
+            },
             &config,
             epoch,
             &augment,
