@@ -77,6 +77,8 @@ fn three_epochs_lower_the_loss_and_write_every_artefact() {
         let vis = image::open(out.join(format!("training_vis/{epoch:03}.png"))).unwrap();
         assert_eq!((vis.width(), vis.height()), (384, 128));
     }
+    let curve = image::open(out.join("losses.png")).unwrap();
+    assert_eq!((curve.width(), curve.height()), (800, 500));
     let csv = std::fs::read_to_string(out.join("losses.csv")).unwrap();
     assert_eq!(csv.lines().count(), 4, "{csv}");
     let best = history(data.path(), "best");

@@ -157,6 +157,7 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
         }
         save_checkpoint(&vs, &adam.named_state(), &meta, &out_dir, "last")?;
         write_losses_csv(&out_dir.join("losses.csv"), &meta.history)?;
+        save_loss_curve(&out_dir.join("losses.png"), &meta.history)?;
         if let Some(&first) = meta.val_indices.first() {
             save_training_vis(&net, &images[first], &vis_dir, epoch)?;
         }
@@ -233,6 +234,77 @@ fn write_losses_csv(path: &Path, history: &[EpochRecord]) -> anyhow::Result<()> 
         ));
     }
     write_atomic(path, text.as_bytes()).with_context(|| format!("writing {}", path.display()))
+}
+
+/// Train and validation loss against epoch (log scale), 800 × 500.
+fn save_loss_curve(path: &Path, history: &[EpochRecord]) -> anyhow::Result<()> {
+    use plotters::prelude::*;
+    static FONT: std::sync::Once = std::sync::Once::new();
+    // plotters draws text with ab_glyph from a font we ship: no system fonts needed.
+    FONT.call_once(|| {
+        let _ = plotters::style::register_font(
+            "sans-serif",
+            FontStyle::Normal,
+            dejavu::sans::regular(),
+        );
+    });
+    let (width, height) = (800u32, 500u32);
+    let mut buffer = vec![0u8; (width * height * 3) as usize];
+    {
+        let area = BitMapBackend::with_buffer(&mut buffer, (width, height)).into_drawing_area();
+        area.fill(&WHITE)?;
+        let losses = history
+            .iter()
+            .flat_map(|r| [r.train_loss, r.val_loss])
+            .filter(|l| l.is_finite() && *l > 0.0);
+        let (lo, hi) = losses.fold((f64::MAX, f64::MIN), |(lo, hi), l| (lo.min(l), hi.max(l)));
+        let (lo, hi) = if lo <= hi {
+            (lo * 0.8, hi * 1.25)
+        } else {
+            (1e-4, 1.0)
+        };
+        let epochs = history.len().max(2) as u32;
+        let mut chart = ChartBuilder::on(&area)
+            .caption("graspmap train: BCE loss", ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(70)
+            .build_cartesian_2d(1u32..epochs, (lo..hi).log_scale())?;
+        chart
+            .configure_mesh()
+            .x_desc("epoch")
+            .y_desc("loss")
+            .label_style(("sans-serif", 14))
+            .draw()?;
+        for (name, color, value) in [
+            (
+                "train",
+                BLUE,
+                (|r: &EpochRecord| r.train_loss) as fn(&EpochRecord) -> f64,
+            ),
+            ("validation", RED, |r: &EpochRecord| r.val_loss),
+        ] {
+            chart
+                .draw_series(LineSeries::new(
+                    history.iter().map(|r| (r.epoch, value(r))),
+                    color.stroke_width(2),
+                ))?
+                .label(name)
+                .legend(move |(x, y)| {
+                    PathElement::new([(x, y), (x + 20, y)], color.stroke_width(2))
+                });
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 14))
+            .draw()?;
+        area.present()?;
+    }
+    let image = image::RgbImage::from_raw(width, height, buffer)
+        .context("the plot buffer has the image's size")?;
+    save_image_atomic(&image, path)
 }
 
 /// input | prediction | target, 128 × 384 (SPEC §7), for one fixed validation image.

@@ -333,8 +333,7 @@ impl Workcell {
                 rng.random_range(-pi..=pi),
                 rng.random_range(-pi..=pi),
             );
-            let index = self.add_object(model, Pose::from_parts(position, rotation))?;
-            let _ = index;
+            self.add_object(model, Pose::from_parts(position, rotation))?;
             self.settle(4.0);
         }
         self.set_robot_collisions(true);

@@ -278,6 +278,8 @@ pub(crate) struct Gripper {
 
 /// Closing and opening speed of each finger (m/s).
 const FINGER_SPEED: f32 = 0.15;
+/// Gain of the force-based velocity motors: high, so that the motor saturates at the grip
+/// force as soon as a finger is blocked instead of easing off near the target speed.
 const FINGER_DAMPING: f32 = 1.0e8;
 
 impl Gripper {
