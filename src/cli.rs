@@ -71,6 +71,17 @@ pub struct TrainArgs {
     /// Continue from DATA/affordance/last.* exactly where it stopped.
     #[arg(long)]
     pub resume: bool,
+    /// Arithmetic: fp32, or bf16 convolutions over fp32 master weights.
+    #[arg(long, default_value = "fp32", value_parser = parse_precision)]
+    pub precision: crate::unet::Precision,
+}
+
+fn parse_precision(text: &str) -> Result<crate::unet::Precision, String> {
+    match text {
+        "fp32" => Ok(crate::unet::Precision::Fp32),
+        "bf16" => Ok(crate::unet::Precision::Bf16),
+        _ => Err(format!("'{text}' is not a precision (use fp32 or bf16)")),
+    }
 }
 
 /// `graspmap label`.

@@ -12,13 +12,13 @@ use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
-use tch::nn::{self, Module};
+use tch::nn;
 use tch::{Device, Kind, Reduction, Tensor};
 
 use crate::augment::AugmentConfig;
 use crate::dataset::{training_sample, LabelledImage, Sample};
 use crate::output::write_atomic;
-use crate::unet::MiniUNet;
+use crate::unet::{MiniUNet, Precision};
 
 /// Training settings (SPEC §7 defaults).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -36,6 +36,8 @@ pub struct TrainConfig {
     pub lr_factor: f64,
     /// Epochs without improvement before the LR drops (3).
     pub patience: u32,
+    /// Arithmetic of the forward and backward passes.
+    pub precision: Precision,
 }
 
 impl Default for TrainConfig {
@@ -47,6 +49,7 @@ impl Default for TrainConfig {
             seed: 0,
             lr_factor: 0.1,
             patience: 3,
+            precision: Precision::Fp32,
         }
     }
 }
@@ -343,9 +346,9 @@ pub fn batch(samples: &[Sample], size: i64) -> (Tensor, Tensor) {
     )
 }
 
-/// Mean BCE-with-logits of a batch.
-pub fn loss(net: &MiniUNet, input: &Tensor, target: &Tensor) -> Tensor {
-    net.forward(input)
+/// Mean BCE-with-logits of a batch (computed in float32 whatever the precision).
+pub fn loss(net: &MiniUNet, input: &Tensor, target: &Tensor, precision: Precision) -> Tensor {
+    net.forward_with(input, precision)
         .binary_cross_entropy_with_logits::<Tensor>(target, None, None, Reduction::Mean)
 }
 
@@ -387,7 +390,12 @@ pub fn train_epoch(
             .map(|&i| training_sample(&data.images[i], Some((augment, &mut rng))))
             .collect();
         let (input, target) = batch(&samples, crate::labels::IMAGE_SIZE as i64);
-        let l = loss(net, &input.to_device(Device::Cpu), &target);
+        let l = loss(
+            net,
+            &input.to_device(Device::Cpu),
+            &target,
+            config.precision,
+        );
         l.backward();
         adam.step();
         let value = l.double_value(&[]);
@@ -399,12 +407,8 @@ pub fn train_epoch(
 }
 
 /// Mean validation loss over unaugmented samples.
-pub fn validate(
-    net: &MiniUNet,
-    images: &[LabelledImage],
-    indices: &[usize],
-    batch_size: usize,
-) -> f64 {
+pub fn validate(net: &MiniUNet, data: Subset, config: &TrainConfig) -> f64 {
+    let (images, indices, batch_size) = (data.images, data.indices, config.batch_size);
     tch::no_grad(|| {
         let mut total = 0.0;
         for chunk in indices.chunks(batch_size) {
@@ -413,21 +417,22 @@ pub fn validate(
                 .map(|&i| training_sample(&images[i], None))
                 .collect();
             let (input, target) = batch(&samples, crate::labels::IMAGE_SIZE as i64);
-            total += loss(net, &input, &target).double_value(&[]) * chunk.len() as f64;
+            total +=
+                loss(net, &input, &target, config.precision).double_value(&[]) * chunk.len() as f64;
         }
         total / indices.len().max(1) as f64
     })
 }
 
 /// The predicted affordance (sigmoid) for one sample, H×W in [0, 1].
-pub fn predict_map(net: &MiniUNet, sample: &Sample) -> Vec<f32> {
+pub fn predict_map(net: &MiniUNet, sample: &Sample, precision: Precision) -> Vec<f32> {
     tch::no_grad(|| {
         let (input, _) = batch(
             std::slice::from_ref(sample),
             crate::labels::IMAGE_SIZE as i64,
         );
         let out = net
-            .forward(&input)
+            .forward_with(&input, precision)
             .sigmoid()
             .to_kind(Kind::Float)
             .flatten(0, -1);

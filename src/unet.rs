@@ -5,7 +5,18 @@
 //! PyTorch's defaults (uniform ±1/√fan_in for weights and biases).
 
 use tch::nn::{self, Module};
-use tch::Tensor;
+use tch::{Kind, Tensor};
+
+/// Arithmetic the forward pass runs in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Precision {
+    /// Plain float32.
+    Fp32,
+    /// bfloat16 convolutions in channels_last layout over float32 master weights; the logits
+    /// come back as float32 for the loss.
+    Bf16,
+}
 
 /// The parameter names of the reference module, in its state_dict order.
 pub const PARAMETER_NAMES: [&str; 16] = [
@@ -98,6 +109,44 @@ impl MiniUNet {
     }
 }
 
+/// Channels-last layout: tch has no memory-format API, so permute, copy, permute back.
+fn channels_last(x: &Tensor) -> Tensor {
+    x.permute([0, 2, 3, 1]).contiguous().permute([0, 3, 1, 2])
+}
+
+fn conv_bf16(x: &Tensor, conv: &nn::Conv2D) -> Tensor {
+    let w = channels_last(&conv.ws.to_kind(Kind::BFloat16));
+    let b = conv.bs.as_ref().map(|b| b.to_kind(Kind::BFloat16));
+    let k = conv.ws.size()[2];
+    x.conv2d(&w, b, [1, 1], [k / 2, k / 2], [1, 1], 1)
+}
+
+fn up_bf16(x: &Tensor, up: &nn::ConvTranspose2D) -> Tensor {
+    let w = channels_last(&up.ws.to_kind(Kind::BFloat16));
+    let b = up.bs.as_ref().map(|b| b.to_kind(Kind::BFloat16));
+    x.conv_transpose2d(&w, b, [2, 2], [0, 0], [0, 0], 1, [1, 1])
+}
+
+impl MiniUNet {
+    /// Logits, N×1×H×W float32, computed in `precision`.
+    pub fn forward_with(&self, xs: &Tensor, precision: Precision) -> Tensor {
+        match precision {
+            Precision::Fp32 => self.forward(xs),
+            Precision::Bf16 => {
+                let x = channels_last(&xs.to_kind(Kind::BFloat16)); // N×3×H×W
+                let x1 = conv_bf16(&x, &self.inc).relu(); // N×64×H×W
+                let x2 = conv_bf16(&x1.max_pool2d_default(2), &self.down1).relu(); // N×128×H/2×W/2
+                let x3 = conv_bf16(&x2.max_pool2d_default(2), &self.down2).relu(); // N×256×H/4×W/4
+                let u1 = up_bf16(&x3, &self.upconv1); // N×128×H/2×W/2
+                let y1 = conv_bf16(&Tensor::cat(&[&u1, &x2], 1), &self.conv1).relu(); // N×128×H/2×W/2
+                let u2 = up_bf16(&y1, &self.upconv2); // N×64×H×W
+                let y2 = conv_bf16(&Tensor::cat(&[&u2, &x1], 1), &self.conv2).relu(); // N×64×H×W
+                conv_bf16(&y2, &self.outc).to_kind(Kind::Float) // N×1×H×W
+            }
+        }
+    }
+}
+
 impl Module for MiniUNet {
     /// Logits, N×1×H×W, for an N×3×H×W input in [0, 1]; H and W divisible by 4.
     fn forward(&self, xs: &Tensor) -> Tensor {
@@ -133,6 +182,28 @@ mod tests {
         assert_eq!(shapes["upconv1.weight"].size(), [256, 128, 2, 2]);
         assert_eq!(shapes["conv1.0.weight"].size(), [128, 256, 3, 3]);
         assert_eq!(shapes["outc.weight"].size(), [1, 64, 1, 1]);
+    }
+
+    #[test]
+    fn bf16_forward_agrees_with_fp32_and_trains_the_fp32_weights() {
+        tch::manual_seed(2);
+        let vs = nn::VarStore::new(Device::Cpu);
+        let net = MiniUNet::new(&vs.root());
+        let x = Tensor::rand([2, 3, 32, 32], (Kind::Float, Device::Cpu));
+        let full = net.forward_with(&x, Precision::Fp32);
+        let half = net.forward_with(&x, Precision::Bf16);
+        assert_eq!(half.kind(), Kind::Float);
+        assert_eq!(half.size(), full.size());
+        let diff = (&full - &half).abs().max().double_value(&[]);
+        let scale = full.abs().max().double_value(&[]);
+        assert!(
+            diff < 0.05 * scale + 1e-3,
+            "bf16 differs by {diff} (scale {scale})"
+        );
+        half.sum(Kind::Float).backward();
+        let grad = vs.variables()["inc.0.weight"].grad();
+        assert_eq!(grad.kind(), Kind::Float);
+        assert!(grad.abs().sum(Kind::Float).double_value(&[]) > 0.0);
     }
 
     #[test]

@@ -40,6 +40,7 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
         batch_size: args.batch_size as usize,
         lr: args.lr,
         seed: args.seed,
+        precision: args.precision,
         ..TrainConfig::default()
     };
     if !(config.lr > 0.0 && config.lr.is_finite()) {
@@ -66,13 +67,15 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
         if meta.config.seed != config.seed
             || meta.config.batch_size != config.batch_size
             || meta.config.lr != config.lr
+            || meta.config.precision != config.precision
         {
             bail!(
-                "{} was trained with --seed {} --batch-size {} --lr {}; resume with the same values",
+                "{} was trained with --seed {} --batch-size {} --lr {} --precision {}; resume with the same values",
                 out_dir.join("last.json").display(),
                 meta.config.seed,
                 meta.config.batch_size,
-                meta.config.lr
+                meta.config.lr,
+                serde_json::to_value(meta.config.precision)?.as_str().unwrap_or("?")
             );
         }
         let known = meta.train_indices.len() + meta.val_indices.len();
@@ -137,7 +140,14 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
                 ))
             },
         );
-        let val_loss = validate(&net, &images, &meta.val_indices, config.batch_size);
+        let val_loss = validate(
+            &net,
+            Subset {
+                images: &images,
+                indices: &meta.val_indices,
+            },
+            &config,
+        );
         meta.history.push(EpochRecord {
             epoch,
             train_loss,
@@ -159,7 +169,7 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
         write_losses_csv(&out_dir.join("losses.csv"), &meta.history)?;
         save_loss_curve(&out_dir.join("losses.png"), &meta.history)?;
         if let Some(&first) = meta.val_indices.first() {
-            save_training_vis(&net, &images[first], &vis_dir, epoch)?;
+            save_training_vis(&net, &images[first], &vis_dir, epoch, config.precision)?;
         }
         bar.inc(1);
         bar.suspend(|| {
@@ -313,9 +323,10 @@ fn save_training_vis(
     item: &LabelledImage,
     dir: &Path,
     epoch: u32,
+    precision: crate::unet::Precision,
 ) -> anyhow::Result<()> {
     let sample = training_sample(item, None);
-    let prediction = crate::train::predict_map(net, &sample);
+    let prediction = crate::train::predict_map(net, &sample, precision);
     let size = IMAGE_SIZE;
     let mut image = image::RgbImage::new(size * 3, size);
     for y in 0..size {
