@@ -443,7 +443,7 @@ pub fn predict_map(net: &MiniUNet, sample: &Sample, precision: Precision) -> Vec
 #[cfg(test)]
 mod tests {
     use super::*;
-    use tch::nn::OptimizerConfig;
+    use tch::nn::{Module, OptimizerConfig};
 
     #[test]
     fn adam_matches_libtorch_adam_step_for_step() {
