@@ -71,16 +71,30 @@ pub struct TrainArgs {
     /// Continue from DATA/affordance/last.* exactly where it stopped.
     #[arg(long)]
     pub resume: bool,
-    /// Arithmetic: fp32, or bf16 convolutions over fp32 master weights.
-    #[arg(long, default_value = "fp32", value_parser = parse_precision)]
-    pub precision: crate::unet::Precision,
+    /// Arithmetic of training.
+    #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
+    pub precision: PrecisionChoice,
 }
 
-fn parse_precision(text: &str) -> Result<crate::unet::Precision, String> {
-    match text {
-        "fp32" => Ok(crate::unet::Precision::Fp32),
-        "bf16" => Ok(crate::unet::Precision::Bf16),
-        _ => Err(format!("'{text}' is not a precision (use fp32 or bf16)")),
+/// `--precision` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PrecisionChoice {
+    /// bf16 where the CPU has native bf16 instructions, else fp32.
+    Auto,
+    /// float32 throughout.
+    Fp32,
+    /// bf16 convolutions (channels_last) over float32 master weights.
+    Bf16,
+}
+
+impl PrecisionChoice {
+    /// The precision to use on this machine.
+    pub fn resolve(self) -> crate::unet::Precision {
+        match self {
+            PrecisionChoice::Auto => crate::unet::Precision::fastest_supported(),
+            PrecisionChoice::Fp32 => crate::unet::Precision::Fp32,
+            PrecisionChoice::Bf16 => crate::unet::Precision::Bf16,
+        }
     }
 }
 

@@ -25,7 +25,15 @@ fn train(data: &Path, args: &[&str]) -> Output {
     Command::new(BIN)
         .arg("--data")
         .arg(data)
-        .args(["--threads", "2", "train", "--batch-size", "2"])
+        .args([
+            "--threads",
+            "2",
+            "train",
+            "--batch-size",
+            "2",
+            "--precision",
+            "fp32",
+        ])
         .args(args)
         .env_remove("GRASPMAP_LOG")
         .output()
@@ -113,6 +121,62 @@ fn resume_continues_exactly_like_an_uninterrupted_run() {
 }
 
 #[test]
+fn bf16_training_also_resumes_exactly() {
+    let straight = data_dir();
+    let bf16 = |data: &Path, args: &[&str]| {
+        Command::new(BIN)
+            .arg("--data")
+            .arg(data)
+            .args([
+                "--threads",
+                "2",
+                "train",
+                "--batch-size",
+                "2",
+                "--precision",
+                "bf16",
+            ])
+            .args(args)
+            .output()
+            .unwrap()
+    };
+    assert_ok(&bf16(straight.path(), &["--epochs", "3"]));
+    let resumed = data_dir();
+    assert_ok(&bf16(resumed.path(), &["--epochs", "2"]));
+    assert_ok(&bf16(resumed.path(), &["--epochs", "3", "--resume"]));
+    let a = history(straight.path(), "last");
+    let b = history(resumed.path(), "last");
+    assert_eq!(serde_json::to_value(a.config.precision).unwrap(), "bf16");
+    for (x, y) in a.history.iter().zip(&b.history) {
+        let rel = ((x.val_loss - y.val_loss) / x.val_loss).abs();
+        assert!(
+            rel <= 1e-5,
+            "epoch {}: {} vs {}",
+            x.epoch,
+            x.val_loss,
+            y.val_loss
+        );
+    }
+    // Resuming in another precision is refused.
+    let out = Command::new(BIN)
+        .arg("--data")
+        .arg(resumed.path())
+        .args([
+            "train",
+            "--batch-size",
+            "2",
+            "--precision",
+            "fp32",
+            "--epochs",
+            "4",
+            "--resume",
+        ])
+        .output()
+        .unwrap();
+    assert_user_error(&out, "--precision bf16");
+}
+
+#[test]
 fn a_checkpoint_round_trips_bit_exactly() {
     tch::manual_seed(3);
     let dir = tempfile::tempdir().unwrap();
@@ -175,5 +239,10 @@ fn missing_or_bad_inputs_are_clear_errors() {
     );
 
     assert_user_error(&train(data.path(), &["--epochs", "0"]), "0");
+    let out = Command::new(BIN)
+        .args(["train", "--precision", "fp16"])
+        .output()
+        .unwrap();
+    assert_user_error(&out, "fp16");
     assert_user_error(&train(data.path(), &["--lr", "-1"]), "-1");
 }

@@ -40,7 +40,7 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
         batch_size: args.batch_size as usize,
         lr: args.lr,
         seed: args.seed,
-        precision: args.precision,
+        precision: args.precision.resolve(),
         ..TrainConfig::default()
     };
     if !(config.lr > 0.0 && config.lr.is_finite()) {
