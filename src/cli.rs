@@ -51,6 +51,33 @@ pub enum Command {
     Label(LabelArgs),
     /// Train the affordance model on the labels (SPEC §7).
     Train(TrainArgs),
+    /// Measure speed against the Python PyTorch peer.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+/// What `graspmap bench` measures.
+#[derive(Debug, Subcommand)]
+pub enum BenchCommand {
+    /// Training-step throughput and 8-rotation inference latency, Rust and Python alternating.
+    Train(BenchTrainArgs),
+}
+
+/// `graspmap bench train`.
+#[derive(Debug, Args)]
+pub struct BenchTrainArgs {
+    /// Timed steps per block and side (after 3 warm-up steps).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..))]
+    pub steps: u32,
+    /// Blocks per side, alternating Rust and Python.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..))]
+    pub rounds: u32,
+    /// Precision of both sides.
+    #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
+    pub precision: PrecisionChoice,
+    /// Time only the Rust side (no Python environment needed).
+    #[arg(long)]
+    pub no_peer: bool,
 }
 
 /// `graspmap train`.
@@ -244,6 +271,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Grasp(args) => commands::grasp::run(&context, args),
         Command::Label(args) => commands::label::run(&context, args),
         Command::Train(args) => commands::train::run(&context, args),
+        Command::Bench(BenchCommand::Train(args)) => commands::bench::run(&context, args),
     }
 }
 

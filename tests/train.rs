@@ -246,3 +246,29 @@ fn missing_or_bad_inputs_are_clear_errors() {
     assert_user_error(&out, "fp16");
     assert_user_error(&train(data.path(), &["--lr", "-1"]), "-1");
 }
+
+#[test]
+fn bench_reports_rust_timings_without_the_peer() {
+    let out = Command::new(BIN)
+        .args([
+            "--json",
+            "-",
+            "bench",
+            "train",
+            "--no-peer",
+            "--steps",
+            "2",
+            "--rounds",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert_ok(&out);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["schema"], "graspmap.bench/1");
+    let rust = &report["results"]["rust"];
+    assert!(rust["train_step_ms"].as_f64().unwrap() > 0.0);
+    assert!(rust["infer_8_rotations_ms"].as_f64().unwrap() > 0.0);
+    assert_eq!(rust["steps"], 2);
+    assert!(report["results"]["python"].is_null());
+}

@@ -1,5 +1,6 @@
 //! Commands: each orchestrates the core, the objects and the simulator, and owns all printing.
 
+pub mod bench;
 pub mod grasp;
 pub mod label;
 pub mod scene;
