@@ -22,18 +22,15 @@ fn data_dir() -> tempfile::TempDir {
 }
 
 fn train(data: &Path, args: &[&str]) -> Output {
+    train_in(data, "fp32", args)
+}
+
+fn train_in(data: &Path, precision: &str, args: &[&str]) -> Output {
     Command::new(BIN)
         .arg("--data")
         .arg(data)
-        .args([
-            "--threads",
-            "2",
-            "train",
-            "--batch-size",
-            "2",
-            "--precision",
-            "fp32",
-        ])
+        .args(["--threads", "2", "train", "--batch-size", "2"])
+        .args(["--precision", precision])
         .args(args)
         .env_remove("GRASPMAP_LOG")
         .output()
@@ -123,23 +120,7 @@ fn resume_continues_exactly_like_an_uninterrupted_run() {
 #[test]
 fn bf16_training_also_resumes_exactly() {
     let straight = data_dir();
-    let bf16 = |data: &Path, args: &[&str]| {
-        Command::new(BIN)
-            .arg("--data")
-            .arg(data)
-            .args([
-                "--threads",
-                "2",
-                "train",
-                "--batch-size",
-                "2",
-                "--precision",
-                "bf16",
-            ])
-            .args(args)
-            .output()
-            .unwrap()
-    };
+    let bf16 = |data: &Path, args: &[&str]| train_in(data, "bf16", args);
     assert_ok(&bf16(straight.path(), &["--epochs", "3"]));
     let resumed = data_dir();
     assert_ok(&bf16(resumed.path(), &["--epochs", "2"]));
