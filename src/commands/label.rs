@@ -1,7 +1,7 @@
 //! `graspmap label`: collect grasp labels round by round, each verified by a simulated pick, resumable after any interruption.
 
 use std::collections::BTreeMap;
-use std::io::{BufRead, IsTerminal};
+use std::io::BufRead;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -177,12 +177,16 @@ pub fn run(context: &Context, args: LabelArgs) -> anyhow::Result<()> {
 
     let start = Instant::now();
     let wanted = args.per_object as u64 * split.train.len() as u64;
-    let bar = progress_bar(
-        context,
-        &args,
-        wanted,
-        labels_in(&labels, &split.train, args.per_object),
-    );
+    // A person at the prompt needs a quiet terminal.
+    let bar = if args.interactive {
+        indicatif::ProgressBar::hidden()
+    } else {
+        context.progress_bar(
+            "labels",
+            wanted,
+            labels_in(&labels, &split.train, args.per_object),
+        )
+    };
     let verbose_rounds = !matches!(clicker, Clicker::Scripted { .. });
     // Objects are independent (each has its own rounds and seeds), so they run on parallel
     // workers; the dataset files are written under one lock, in split order, so the result does
@@ -380,26 +384,6 @@ fn labels_in(labels: &Labels, objects: &[String], cap: u32) -> u64 {
         .iter()
         .map(|o| labels.of(o).len().min(cap as usize) as u64)
         .sum()
-}
-
-fn progress_bar(
-    context: &Context,
-    args: &LabelArgs,
-    len: u64,
-    done: u64,
-) -> indicatif::ProgressBar {
-    if context.quiet || args.interactive || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(len);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{bar:30} {pos}/{len} labels  {msg}  [{elapsed_precise}, ETA {eta}]",
-        )
-        .expect("the template is valid"),
-    );
-    bar.set_position(done);
-    bar
 }
 
 fn print_summary(context: &Context, results: &LabelResults) {

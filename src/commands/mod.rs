@@ -87,6 +87,24 @@ impl Context {
         }
     }
 
+    /// A progress bar with ETA over `len` `unit`s, `done` already: drawn on a terminal,
+    /// hidden under `--quiet`, in CI and when stderr is redirected.
+    pub fn progress_bar(&self, unit: &str, len: u64, done: u64) -> indicatif::ProgressBar {
+        use std::io::IsTerminal;
+        if self.quiet || !std::io::stderr().is_terminal() {
+            return indicatif::ProgressBar::hidden();
+        }
+        let bar = indicatif::ProgressBar::new(len);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template(&format!(
+                "{{bar:30}} {{pos}}/{{len}} {unit}  {{msg}}  [{{elapsed_precise}}, ETA {{eta}}]"
+            ))
+            .expect("the template is valid"),
+        );
+        bar.set_position(done);
+        bar
+    }
+
     /// Path of the robot assets.
     pub fn assets(&self) -> &Path {
         &self.assets

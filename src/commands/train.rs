@@ -1,6 +1,5 @@
 //! `graspmap train`: fit the MiniUNet to the labels, with best/last checkpoints, per-epoch visualisations and exact resume.
 
-use std::io::IsTerminal;
 use std::path::Path;
 use std::time::Instant;
 
@@ -117,7 +116,7 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
 
     let start = Instant::now();
     let augment = AugmentConfig::default();
-    let bar = epoch_bar(context, config.epochs as u64, meta.epoch as u64);
+    let bar = context.progress_bar("epochs", config.epochs as u64, meta.epoch as u64);
     let vis_dir = out_dir.join("training_vis");
     while meta.epoch < config.epochs {
         let epoch = meta.epoch + 1;
@@ -218,21 +217,6 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
         write_report(json, "train", config.seed, &resolved, &results)?;
     }
     Ok(())
-}
-
-fn epoch_bar(context: &Context, len: u64, done: u64) -> indicatif::ProgressBar {
-    if context.quiet || !std::io::stderr().is_terminal() {
-        return indicatif::ProgressBar::hidden();
-    }
-    let bar = indicatif::ProgressBar::new(len);
-    bar.set_style(
-        indicatif::ProgressStyle::with_template(
-            "{bar:30} {pos}/{len} epochs  {msg}  [{elapsed_precise}, ETA {eta}]",
-        )
-        .expect("the template is valid"),
-    );
-    bar.set_position(done);
-    bar
 }
 
 fn write_losses_csv(path: &Path, history: &[EpochRecord]) -> anyhow::Result<()> {
