@@ -51,6 +51,10 @@ pub enum Command {
     Label(LabelArgs),
     /// Train the affordance model on the labels (SPEC §7).
     Train(TrainArgs),
+    /// Let a policy pick objects in simulation and report how it did (SPEC §8).
+    Eval(EvalArgs),
+    /// Run the trained model on a 128 × 128 RGB image and print its best grasp.
+    Predict(PredictArgs),
     /// Measure speed against the Python PyTorch peer.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -122,6 +126,131 @@ impl PrecisionChoice {
             PrecisionChoice::Fp32 => crate::unet::Precision::Fp32,
             PrecisionChoice::Bf16 => crate::unet::Precision::Bf16,
         }
+    }
+}
+
+/// `--task` values, spelled as the reference spells them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Task {
+    /// Each training object alone, 3 attempts each.
+    #[value(name = "train")]
+    Train,
+    /// Each test (unseen) object alone, 3 attempts each.
+    #[value(name = "test")]
+    Test,
+    /// All 15 objects in bin 1 at once; move as many as possible to bin 2.
+    #[value(name = "empty_bin")]
+    EmptyBin,
+}
+
+/// `--policy` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PolicyChoice {
+    /// The trained affordance model (argmax over 8 rotations).
+    Model,
+    /// A uniformly random pixel of bin 1's floor and a random angle.
+    Random,
+    /// The workcell's planner, from ground-truth masks and depth.
+    Oracle,
+}
+
+/// `graspmap eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// Which evaluation to run.
+    #[arg(long, value_enum)]
+    pub task: Task,
+    /// Who chooses the grasps.
+    #[arg(long, value_enum, default_value_t = PolicyChoice::Model)]
+    pub policy: PolicyChoice,
+    /// Model weights [default: DATA/affordance/best.safetensors].
+    #[arg(long, value_name = "PATH")]
+    pub checkpoint: Option<PathBuf>,
+    /// Base seed: train/test attempt a of object i drops with seed + 100·i + a + 10000;
+    /// empty_bin drops all objects with it [default: 0, empty_bin 2].
+    #[arg(long, conflicts_with = "seeds")]
+    pub seed: Option<u64>,
+    /// Several base seeds, aggregated: a list and/or ranges, e.g. 1-10 or 0,1000,2000.
+    #[arg(long, value_name = "LIST", value_parser = parse_seed_list)]
+    pub seeds: Option<SeedList>,
+    /// Failure suppression: lower the affordance around the last N failed actions (0 = off).
+    #[arg(long = "n_past_action", visible_alias = "n-past-action", default_value_t = 0)]
+    pub n_past_action: usize,
+    /// Suppression: standard deviation of the subtracted Gaussian in pixels.
+    #[arg(long, default_value_t = 4.0, value_parser = positive)]
+    pub suppression_sigma: f32,
+    /// Suppression: lower only the failed action's own rotation, not all 8.
+    #[arg(long)]
+    pub suppress_per_rotation: bool,
+    /// Suppression: remember successful actions too, not only failures.
+    #[arg(long)]
+    pub suppress_successes: bool,
+    /// empty_bin: most pick attempts per scene.
+    #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_attempts: u32,
+    /// Write the episode video: an oblique view beside the camera view with the chosen grasp
+    /// (one seed only).
+    #[arg(long, value_name = "GIF", conflicts_with = "seeds")]
+    pub record: Option<PathBuf>,
+    /// Arithmetic of the network.
+    #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
+    pub precision: PrecisionChoice,
+}
+
+/// `graspmap predict`.
+#[derive(Debug, Args)]
+pub struct PredictArgs {
+    /// A 128 × 128 RGB image (PNG or JPEG) seen from the top-down camera.
+    #[arg(long, value_name = "IMAGE")]
+    pub image: PathBuf,
+    /// Model weights [default: DATA/affordance/best.safetensors].
+    #[arg(long, value_name = "PATH")]
+    pub checkpoint: Option<PathBuf>,
+    /// Where to write the 512 × 512 visualisation [default: DATA/affordance/predict_vis/<image stem>.png].
+    #[arg(long, value_name = "PNG")]
+    pub out: Option<PathBuf>,
+    /// Arithmetic of the network.
+    #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
+    pub precision: PrecisionChoice,
+}
+
+/// Seeds given as a list and/or ranges.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SeedList(pub Vec<u64>);
+
+/// Parses `1-10`, `0,1000,2000` or a mix such as `1-3,7`.
+pub fn parse_seed_list(text: &str) -> Result<SeedList, String> {
+    let fail = |why: &str| format!("'{text}' {why}; use a list and/or ranges such as 1-10 or 0,1000,2000");
+    let mut seeds = Vec::new();
+    for part in text.split(',').map(str::trim) {
+        let number = |s: &str| s.trim().parse::<u64>().map_err(|_| fail(&format!("has '{s}', not a seed")));
+        match part.split_once('-') {
+            Some((a, b)) => {
+                let (a, b) = (number(a)?, number(b)?);
+                if a > b {
+                    return Err(fail(&format!("has the empty range {a}-{b}")));
+                }
+                if b - a >= 100_000 {
+                    return Err(fail("spans more than 100000 seeds"));
+                }
+                seeds.extend(a..=b);
+            }
+            None => seeds.push(number(part)?),
+        }
+    }
+    let mut seen = std::collections::HashSet::new();
+    if let Some(d) = seeds.iter().find(|s| !seen.insert(**s)) {
+        return Err(fail(&format!("repeats seed {d}")));
+    }
+    Ok(SeedList(seeds))
+}
+
+fn positive(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if v > 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("'{text}' must be a positive number")),
     }
 }
 
@@ -271,6 +400,8 @@ pub fn run() -> anyhow::Result<()> {
         Command::Grasp(args) => commands::grasp::run(&context, args),
         Command::Label(args) => commands::label::run(&context, args),
         Command::Train(args) => commands::train::run(&context, args),
+        Command::Eval(args) => commands::eval::run(&context, args),
+        Command::Predict(args) => commands::predict::run(&context, args),
         Command::Bench(BenchCommand::Train(args)) => commands::bench::run(&context, args),
     }
 }
@@ -307,6 +438,26 @@ mod tests {
             .unwrap_err()
             .to_string()
             .contains("two integers"));
+    }
+
+    #[test]
+    fn seed_lists_take_ranges_and_lists_and_reject_nonsense() {
+        assert_eq!(parse_seed_list("1-4").unwrap().0, [1, 2, 3, 4]);
+        assert_eq!(parse_seed_list("0,1000,2000").unwrap().0, [0, 1000, 2000]);
+        assert_eq!(parse_seed_list("1-3, 7").unwrap().0, [1, 2, 3, 7]);
+        assert!(parse_seed_list("5-2").unwrap_err().contains("empty range"));
+        assert!(parse_seed_list("1,x").unwrap_err().contains("'x'"));
+        assert!(parse_seed_list("1,2,1").unwrap_err().contains("repeats seed 1"));
+        assert!(parse_seed_list("").is_err());
+    }
+
+    #[test]
+    fn task_names_are_spelled_as_the_reference_spells_them() {
+        let names: Vec<String> = <Task as clap::ValueEnum>::value_variants()
+            .iter()
+            .map(|t| t.to_possible_value().unwrap().get_name().to_owned())
+            .collect();
+        assert_eq!(names, ["train", "test", "empty_bin"]);
     }
 
     #[test]

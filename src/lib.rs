@@ -4,14 +4,17 @@
 //! `augment`) does no I/O; `unet` and `train` are the model (tch, no rapier); `urdf` and `objects` read model files; `sim` is the rapier workcell; `commands` and
 //! `cli` orchestrate.
 
+pub mod affordance;
 pub mod augment;
 pub mod camera;
 pub mod cli;
 pub mod commands;
 pub mod dataset;
 pub mod grasp;
+pub mod inference;
 pub mod kinematics;
 pub mod labels;
+pub mod metrics;
 pub mod objects;
 pub mod oracle;
 pub mod output;

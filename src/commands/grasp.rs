@@ -12,6 +12,7 @@ use crate::camera::Camera;
 use crate::cli::{parse_pixel, GraspArgs};
 use crate::grasp::{normalize_angle, world_grasp, PixelGrasp};
 use crate::oracle::{self, OracleConfig};
+use crate::affordance::draw_grasp;
 use crate::output::{save_gif_atomic, save_image_atomic, write_report};
 use crate::sim::pick::{PickOutcome, PickReason};
 use crate::sim::{Workcell, WorkcellConfig, BIN1_CENTER, BIN_FLOOR_TOP, BIN_INNER_HALF};
@@ -214,21 +215,3 @@ pub fn record_camera() -> Camera {
 pub const RECORD_EVERY_STEPS: u64 = 10;
 /// GIF frame delay in hundredths of a second, matching `RECORD_EVERY_STEPS`.
 pub const RECORD_DELAY_CS: u32 = 4;
-
-/// Draws a grasp as SPEC §7's finger points (centre ± 10 px along θ) joined by a line.
-pub fn draw_grasp(image: &mut image::RgbImage, g: &PixelGrasp) {
-    let (cx, cy) = (g.u as f32 + 0.5, g.v as f32 + 0.5);
-    let theta = g.angle_deg.to_radians();
-    let (dx, dy) = (10.0 * theta.cos(), 10.0 * theta.sin());
-    let line = image::Rgb([255, 40, 40]);
-    imageproc::drawing::draw_line_segment_mut(image, (cx - dx, cy - dy), (cx + dx, cy + dy), line);
-    for (x, y) in [(cx - dx, cy - dy), (cx + dx, cy + dy)] {
-        imageproc::drawing::draw_filled_circle_mut(
-            image,
-            (x as i32, y as i32),
-            1,
-            image::Rgb([40, 220, 40]),
-        );
-    }
-    image.put_pixel(g.u.min(127), g.v.min(127), image::Rgb([255, 255, 0]));
-}

@@ -571,7 +571,7 @@ fn interactive_click(
     let mut lines = stdin.lock().lines();
     loop {
         let mut image = frame.to_rgb_image();
-        super::grasp::draw_grasp(&mut image, &cursor);
+        crate::affordance::draw_grasp(&mut image, &cursor);
         let big = image::imageops::resize(&image, 512, 512, image::imageops::FilterType::Nearest);
         save_image_atomic(&big, preview)?;
         eprint!(

@@ -1,8 +1,10 @@
 //! Commands: each orchestrates the core, the objects and the simulator, and owns all printing.
 
 pub mod bench;
+pub mod eval;
 pub mod grasp;
 pub mod label;
+pub mod predict;
 pub mod scene;
 pub mod train;
 

@@ -1,0 +1,463 @@
+//! Choosing a grasp from 8 rotated affordance maps: argmax, rotation back, failure suppression and the visualisation grid (SPEC §8).
+//!
+//! Map `b` scores the observation rotated by −b · 22.5° (the same rotation as training, in
+//! [`crate::augment`]), so a peak there is a horizontal grasp in the rotated image and a grasp at
+//! angle b · 22.5° in the original. Everything here is pure: maps in, choices and images out.
+
+use std::collections::VecDeque;
+
+use image::{Rgb, RgbImage};
+
+use crate::augment::{rotate_image, rotate_point};
+use crate::dataset::{bin_angle, BINS};
+use crate::grasp::PixelGrasp;
+
+/// The network's scores for one observation: [`BINS`] maps of `size` × `size`, each in the frame
+/// of the observation rotated by −bin · 22.5°, values in [0, 1].
+#[derive(Debug, Clone, PartialEq)]
+pub struct AffordanceMaps {
+    size: u32,
+    values: Vec<f32>,
+}
+
+impl AffordanceMaps {
+    /// Wraps bin-major, row-major scores; `values.len()` must be `BINS · size²`.
+    pub fn new(size: u32, values: Vec<f32>) -> Self {
+        assert_eq!(
+            values.len(),
+            BINS * (size * size) as usize,
+            "{BINS} maps of {size}×{size} expected"
+        );
+        Self { size, values }
+    }
+
+    /// Side length of each map.
+    pub fn size(&self) -> u32 {
+        self.size
+    }
+
+    /// Score at (column `u`, row `v`) of map `bin`.
+    pub fn get(&self, bin: usize, u: u32, v: u32) -> f32 {
+        self.values[self.index(bin, u, v)]
+    }
+
+    /// One map, row-major.
+    pub fn map(&self, bin: usize) -> &[f32] {
+        let plane = (self.size * self.size) as usize;
+        &self.values[bin * plane..(bin + 1) * plane]
+    }
+
+    fn index(&self, bin: usize, u: u32, v: u32) -> usize {
+        (bin * self.size as usize + v as usize) * self.size as usize + u as usize
+    }
+
+    /// The best (bin, row, column), first in that order on ties (like argmax over the flattened
+    /// batch), turned into a grasp in the original image.
+    pub fn choose(&self) -> Choice {
+        let (best, score) = self
+            .values
+            .iter()
+            .copied()
+            .enumerate()
+            .fold((0, f32::NEG_INFINITY), |best, (i, s)| {
+                if s > best.1 {
+                    (i, s)
+                } else {
+                    best
+                }
+            });
+        let plane = (self.size * self.size) as usize;
+        let bin = best / plane;
+        let (v, u) = (
+            (best % plane) as u32 / self.size,
+            (best % plane) as u32 % self.size,
+        );
+        Choice {
+            bin,
+            rotated: [u, v],
+            grasp: unrotate(bin, u, v, self.size),
+            score: score.max(0.0),
+        }
+    }
+}
+
+/// A chosen action.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Choice {
+    /// Angle bin (the map it came from).
+    pub bin: usize,
+    /// Pixel [column, row] in the rotated map.
+    pub rotated: [u32; 2],
+    /// The grasp in the original image.
+    pub grasp: PixelGrasp,
+    /// Affordance at the chosen pixel (after any suppression).
+    pub score: f32,
+}
+
+/// The original-image grasp for pixel (`u`, `v`) of map `bin`: the pixel's centre rotated by
+/// +bin · 22.5°, the pixel holding it, clipped to the image; the angle is the bin's.
+pub fn unrotate(bin: usize, u: u32, v: u32, size: u32) -> PixelGrasp {
+    let [x, y] = rotate_point([u as f32 + 0.5, v as f32 + 0.5], bin_angle(bin), size);
+    let clip = |c: f32| (c.floor().max(0.0) as u32).min(size - 1);
+    PixelGrasp {
+        u: clip(x),
+        v: clip(y),
+        angle_deg: bin_angle(bin),
+    }
+}
+
+/// The rotated observations the maps belong to: image `b` is the original turned by −b · 22.5°.
+pub fn rotated_observations(image: &RgbImage) -> Vec<RgbImage> {
+    (0..BINS)
+        .map(|b| rotate_image(image, -bin_angle(b)))
+        .collect()
+}
+
+/// How failure suppression lowers the maps around past actions.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SuppressionConfig {
+    /// Actions remembered (the user's `--n_past_action`); 0 turns suppression off.
+    pub remember: usize,
+    /// Standard deviation of the subtracted Gaussian, in pixels.
+    pub sigma_px: f32,
+    /// Lower only the past action's own rotation (true) or every rotation (false).
+    pub per_rotation: bool,
+    /// Whether successful actions enter the memory too.
+    pub remember_successes: bool,
+}
+
+impl Default for SuppressionConfig {
+    /// The measured choice (BENCHMARKS.md, "Failure suppression"): σ = 4 px over all rotations,
+    /// failures only.
+    fn default() -> Self {
+        Self {
+            remember: 0,
+            sigma_px: 4.0,
+            per_rotation: false,
+            remember_successes: false,
+        }
+    }
+}
+
+/// The last N actions and the map lowering they cause.
+#[derive(Debug, Clone)]
+pub struct Suppression {
+    config: SuppressionConfig,
+    past: VecDeque<Choice>,
+}
+
+impl Suppression {
+    /// An empty memory.
+    pub fn new(config: SuppressionConfig) -> Self {
+        Self {
+            config,
+            past: VecDeque::new(),
+        }
+    }
+
+    /// Remembers an executed action (a no-op for successes unless configured, and when off).
+    pub fn record(&mut self, choice: Choice, success: bool) {
+        if self.config.remember == 0 || (success && !self.config.remember_successes) {
+            return;
+        }
+        if self.past.len() == self.config.remember {
+            self.past.pop_front();
+        }
+        self.past.push_back(choice);
+    }
+
+    /// The remembered actions, oldest first.
+    pub fn past(&self) -> impl Iterator<Item = &Choice> {
+        self.past.iter()
+    }
+
+    /// Subtracts a unit-peak Gaussian around each remembered action and clips to [0, 1]. The
+    /// action's original-image grasp centre is carried into each rotated frame, so all bins see
+    /// the same spot on the object.
+    pub fn apply(&self, maps: &mut AffordanceMaps) {
+        let size = maps.size;
+        let two_var = 2.0 * self.config.sigma_px * self.config.sigma_px;
+        let reach = (3.0 * self.config.sigma_px).ceil() as i64;
+        for past in &self.past {
+            let centre = [past.grasp.u as f32 + 0.5, past.grasp.v as f32 + 0.5];
+            for bin in 0..BINS {
+                if self.config.per_rotation && bin != past.bin {
+                    continue;
+                }
+                let [cx, cy] = rotate_point(centre, -bin_angle(bin), size);
+                let (iu, iv) = (cx.floor() as i64, cy.floor() as i64);
+                for v in (iv - reach).max(0)..=(iv + reach).min(size as i64 - 1) {
+                    for u in (iu - reach).max(0)..=(iu + reach).min(size as i64 - 1) {
+                        let du = u as f32 + 0.5 - cx;
+                        let dv = v as f32 + 0.5 - cy;
+                        let i = maps.index(bin, u as u32, v as u32);
+                        let lowered = maps.values[i] - (-(du * du + dv * dv) / two_var).exp();
+                        maps.values[i] = lowered.clamp(0.0, 1.0);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Marks a grasp: the finger points (centre ± 10 px along θ, SPEC §7) joined by a red line,
+/// green finger dots and a yellow centre pixel.
+pub fn draw_grasp(image: &mut RgbImage, g: &PixelGrasp) {
+    let (cx, cy) = (g.u as f32 + 0.5, g.v as f32 + 0.5);
+    let (sin, cos) = g.angle_deg.to_radians().sin_cos();
+    let (dx, dy) = (10.0 * cos, 10.0 * sin);
+    let line = Rgb([255, 40, 40]);
+    imageproc::drawing::draw_line_segment_mut(image, (cx - dx, cy - dy), (cx + dx, cy + dy), line);
+    for (x, y) in [(cx - dx, cy - dy), (cx + dx, cy + dy)] {
+        imageproc::drawing::draw_filled_circle_mut(
+            image,
+            (x as i32, y as i32),
+            1,
+            Rgb([40, 220, 40]),
+        );
+    }
+    let (w, h) = image.dimensions();
+    image.put_pixel(g.u.min(w - 1), g.v.min(h - 1), Rgb([255, 255, 0]));
+}
+
+/// The ref's 512 × 512 grid: for each bin, the rotated observation beside its (suppressed) map
+/// in viridis, two pairs per row, four rows; the chosen grasp is drawn, horizontal, on both
+/// panels of its bin, which also gets a white frame.
+pub fn visualisation(rotated: &[RgbImage], maps: &AffordanceMaps, choice: &Choice) -> RgbImage {
+    let size = maps.size;
+    let mut grid = RgbImage::new(4 * size, (BINS as u32).div_ceil(2) * size);
+    for (bin, observation) in rotated.iter().enumerate().take(BINS) {
+        let x0 = (bin as u32 % 2) * 2 * size;
+        let y0 = (bin as u32 / 2) * size;
+        let mut rgb = observation.clone();
+        let mut heat = RgbImage::from_fn(size, size, |u, v| {
+            Rgb(crate::render::viridis(maps.get(bin, u, v)))
+        });
+        if bin == choice.bin {
+            let g = PixelGrasp {
+                u: choice.rotated[0],
+                v: choice.rotated[1],
+                angle_deg: 0.0,
+            };
+            for panel in [&mut rgb, &mut heat] {
+                draw_grasp(panel, &g);
+                imageproc::drawing::draw_hollow_rect_mut(
+                    panel,
+                    imageproc::rect::Rect::at(0, 0).of_size(size, size),
+                    Rgb([255, 255, 255]),
+                );
+            }
+        }
+        image::imageops::replace(&mut grid, &rgb, i64::from(x0), i64::from(y0));
+        image::imageops::replace(&mut grid, &heat, i64::from(x0 + size), i64::from(y0));
+    }
+    grid
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SIZE: u32 = 128;
+
+    fn empty_maps() -> AffordanceMaps {
+        AffordanceMaps::new(SIZE, vec![0.0; BINS * (SIZE * SIZE) as usize])
+    }
+
+    #[test]
+    fn a_peak_in_each_rotation_comes_back_at_its_original_pixel_and_angle() {
+        // Put a grasp at a known original pixel, carry it into bin k's frame the way the dataset
+        // does (continuous centre rotated by −k·22.5°, the pixel holding it), plant the peak
+        // there, and expect prediction to return the original pixel within 1 px and angle k·22.5°.
+        for &(x, y) in &[(64u32, 64u32), (30, 90), (100, 20), (10, 10), (120, 70)] {
+            for bin in 0..BINS {
+                let [rx, ry] =
+                    rotate_point([x as f32 + 0.5, y as f32 + 0.5], -bin_angle(bin), SIZE);
+                if !(0.0..SIZE as f32).contains(&rx) || !(0.0..SIZE as f32).contains(&ry) {
+                    continue; // rotated out of the image: the network cannot score it there
+                }
+                let mut maps = empty_maps();
+                let i = maps.index(bin, rx as u32, ry as u32);
+                maps.values[i] = 0.9;
+                let choice = maps.choose();
+                assert_eq!(choice.bin, bin);
+                assert_eq!(choice.rotated, [rx as u32, ry as u32]);
+                assert_eq!(choice.grasp.angle_deg, bin as f32 * 22.5);
+                let du = choice.grasp.u as i64 - x as i64;
+                let dv = choice.grasp.v as i64 - y as i64;
+                assert!(
+                    du.abs() <= 1 && dv.abs() <= 1,
+                    "bin {bin}: ({x}, {y}) came back as ({}, {})",
+                    choice.grasp.u,
+                    choice.grasp.v
+                );
+                assert!((choice.score - 0.9).abs() < 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn the_round_trip_matches_the_training_rotation_of_a_labelled_grasp() {
+        // make_sample puts the target peak where prediction must look; unrotating it must give
+        // the label back.
+        let image = RgbImage::new(SIZE, SIZE);
+        for bin in 0..BINS {
+            let label = PixelGrasp {
+                u: 40 + bin as u32 * 5,
+                v: 70,
+                angle_deg: bin_angle(bin),
+            };
+            let sample = crate::dataset::make_sample(&image, crate::augment::fingers(label));
+            let (pu, pv) = sample.center_pixel(SIZE).expect("inside");
+            let back = unrotate(sample.bin, pu, pv, SIZE);
+            assert!((back.u as i64 - label.u as i64).abs() <= 1, "{back:?} vs {label:?}");
+            assert!((back.v as i64 - label.v as i64).abs() <= 1, "{back:?} vs {label:?}");
+            assert_eq!(back.angle_deg, label.angle_deg);
+        }
+    }
+
+    #[test]
+    fn corner_pixels_are_clipped_into_the_image() {
+        for bin in 0..BINS {
+            for (u, v) in [(0, 0), (127, 0), (0, 127), (127, 127)] {
+                let g = unrotate(bin, u, v, SIZE);
+                assert!(g.u < SIZE && g.v < SIZE);
+            }
+        }
+    }
+
+    #[test]
+    fn ties_go_to_the_first_bin_row_and_column() {
+        let mut maps = empty_maps();
+        for (bin, u, v) in [(3, 5, 9), (3, 6, 8), (5, 1, 1)] {
+            let i = maps.index(bin, u, v);
+            maps.values[i] = 1.0;
+        }
+        let choice = maps.choose();
+        assert_eq!((choice.bin, choice.rotated), (3, [6, 8]));
+    }
+
+    /// A static map with a few bumps of different heights.
+    fn bumpy_maps() -> AffordanceMaps {
+        let mut maps = empty_maps();
+        for bin in 0..BINS {
+            for v in 0..SIZE {
+                for u in 0..SIZE {
+                    let bump = |cx: f32, cy: f32, h: f32| {
+                        h * (-((u as f32 - cx).powi(2) + (v as f32 - cy).powi(2)) / 50.0).exp()
+                    };
+                    let i = maps.index(bin, u, v);
+                    maps.values[i] = bump(40.0, 60.0, 0.9)
+                        .max(bump(80.0, 70.0, 0.8 - bin as f32 * 0.01))
+                        .max(bump(64.0, 30.0, 0.7));
+                }
+            }
+        }
+        maps
+    }
+
+    #[test]
+    fn with_one_remembered_action_the_same_pixel_is_never_chosen_twice_in_a_row() {
+        for per_rotation in [false, true] {
+            let raw = bumpy_maps();
+            let mut memory = Suppression::new(SuppressionConfig {
+                remember: 1,
+                per_rotation,
+                ..SuppressionConfig::default()
+            });
+            let mut previous: Option<Choice> = None;
+            for _ in 0..20 {
+                let mut maps = raw.clone();
+                memory.apply(&mut maps);
+                let choice = maps.choose();
+                if let Some(p) = previous {
+                    assert!(
+                        (p.bin, p.rotated) != (choice.bin, choice.rotated),
+                        "per_rotation {per_rotation}: chose {choice:?} twice in a row"
+                    );
+                }
+                memory.record(choice, false);
+                previous = Some(choice);
+            }
+        }
+    }
+
+    #[test]
+    fn suppression_moves_the_choice_to_the_next_best_spot_and_forgets_old_actions() {
+        let raw = bumpy_maps();
+        let mut memory = Suppression::new(SuppressionConfig {
+            remember: 2,
+            ..SuppressionConfig::default()
+        });
+        let first = raw.choose();
+        assert_eq!((first.grasp.u, first.grasp.v), (40, 60));
+        memory.record(first, false);
+        let mut maps = raw.clone();
+        memory.apply(&mut maps);
+        let second = maps.choose();
+        assert_eq!((second.grasp.u, second.grasp.v), (80, 70));
+        memory.record(second, false);
+        let mut maps = raw.clone();
+        memory.apply(&mut maps);
+        assert_eq!((maps.choose().grasp.u, maps.choose().grasp.v), (64, 30));
+        assert!(maps.values.iter().all(|v| (0.0..=1.0).contains(v)));
+        // A third failure pushes the first out of the two-action memory.
+        memory.record(maps.choose(), false);
+        let mut maps = raw.clone();
+        memory.apply(&mut maps);
+        assert_eq!((maps.choose().grasp.u, maps.choose().grasp.v), (40, 60));
+    }
+
+    #[test]
+    fn successes_are_forgotten_unless_configured_and_zero_means_off() {
+        let choice = bumpy_maps().choose();
+        let mut off = Suppression::new(SuppressionConfig::default());
+        off.record(choice, false);
+        assert_eq!(off.past().count(), 0);
+        let mut failures = Suppression::new(SuppressionConfig {
+            remember: 4,
+            ..SuppressionConfig::default()
+        });
+        failures.record(choice, true);
+        assert_eq!(failures.past().count(), 0);
+        let mut all = Suppression::new(SuppressionConfig {
+            remember: 4,
+            remember_successes: true,
+            ..SuppressionConfig::default()
+        });
+        all.record(choice, true);
+        assert_eq!(all.past().count(), 1);
+    }
+
+    #[test]
+    fn per_rotation_suppression_leaves_other_bins_alone() {
+        let raw = bumpy_maps();
+        let first = raw.choose();
+        let mut memory = Suppression::new(SuppressionConfig {
+            remember: 1,
+            per_rotation: true,
+            ..SuppressionConfig::default()
+        });
+        memory.record(first, false);
+        let mut maps = raw.clone();
+        memory.apply(&mut maps);
+        for bin in 0..BINS {
+            let changed = maps.map(bin) != raw.map(bin);
+            assert_eq!(changed, bin == first.bin, "bin {bin}");
+        }
+    }
+
+    #[test]
+    fn the_grid_is_512_square_with_the_map_beside_each_rotation() {
+        let image = RgbImage::from_pixel(SIZE, SIZE, Rgb([200, 10, 10]));
+        let rotated = rotated_observations(&image);
+        let maps = bumpy_maps();
+        let choice = maps.choose();
+        let grid = visualisation(&rotated, &maps, &choice);
+        assert_eq!(grid.dimensions(), (512, 512));
+        // Bin 3 sits in row 1, right half: its observation at x 256.., its map at x 384...
+        assert_eq!(grid.get_pixel(256 + 64, 128 + 64).0, rotated[3].get_pixel(64, 64).0);
+        let expected = crate::render::viridis(maps.get(3, 10, 5));
+        assert_eq!(grid.get_pixel(384 + 10, 128 + 5).0, expected);
+    }
+}
