@@ -47,6 +47,16 @@ impl AffordanceMaps {
         &self.values[bin * plane..(bin + 1) * plane]
     }
 
+    /// Zeroes the scores of actions that are not allowed (`allowed` in the same layout).
+    pub fn restrict(&mut self, allowed: &[bool]) {
+        assert_eq!(allowed.len(), self.values.len(), "one flag per score");
+        for (value, &ok) in self.values.iter_mut().zip(allowed) {
+            if !ok {
+                *value = 0.0;
+            }
+        }
+    }
+
     fn index(&self, bin: usize, u: u32, v: u32) -> usize {
         (bin * self.size as usize + v as usize) * self.size as usize + u as usize
     }
@@ -54,18 +64,18 @@ impl AffordanceMaps {
     /// The best (bin, row, column), first in that order on ties (like argmax over the flattened
     /// batch), turned into a grasp in the original image.
     pub fn choose(&self) -> Choice {
-        let (best, score) = self
-            .values
-            .iter()
-            .copied()
-            .enumerate()
-            .fold((0, f32::NEG_INFINITY), |best, (i, s)| {
-                if s > best.1 {
-                    (i, s)
-                } else {
-                    best
-                }
-            });
+        let (best, score) =
+            self.values
+                .iter()
+                .copied()
+                .enumerate()
+                .fold((0, f32::NEG_INFINITY), |best, (i, s)| {
+                    if s > best.1 {
+                        (i, s)
+                    } else {
+                        best
+                    }
+                });
         let plane = (self.size * self.size) as usize;
         let bin = best / plane;
         let (v, u) = (
@@ -310,8 +320,14 @@ mod tests {
             let sample = crate::dataset::make_sample(&image, crate::augment::fingers(label));
             let (pu, pv) = sample.center_pixel(SIZE).expect("inside");
             let back = unrotate(sample.bin, pu, pv, SIZE);
-            assert!((back.u as i64 - label.u as i64).abs() <= 1, "{back:?} vs {label:?}");
-            assert!((back.v as i64 - label.v as i64).abs() <= 1, "{back:?} vs {label:?}");
+            assert!(
+                (back.u as i64 - label.u as i64).abs() <= 1,
+                "{back:?} vs {label:?}"
+            );
+            assert!(
+                (back.v as i64 - label.v as i64).abs() <= 1,
+                "{back:?} vs {label:?}"
+            );
             assert_eq!(back.angle_deg, label.angle_deg);
         }
     }
@@ -337,19 +353,23 @@ mod tests {
         assert_eq!((choice.bin, choice.rotated), (3, [6, 8]));
     }
 
-    /// A static map with a few bumps of different heights.
+    /// Maps of one static scene with three bumps of different heights, drawn where each rotated
+    /// frame sees them (so every bin agrees on where the bumps are in the original image).
     fn bumpy_maps() -> AffordanceMaps {
         let mut maps = empty_maps();
         for bin in 0..BINS {
             for v in 0..SIZE {
                 for u in 0..SIZE {
+                    let [x, y] =
+                        rotate_point([u as f32 + 0.5, v as f32 + 0.5], bin_angle(bin), SIZE);
                     let bump = |cx: f32, cy: f32, h: f32| {
-                        h * (-((u as f32 - cx).powi(2) + (v as f32 - cy).powi(2)) / 50.0).exp()
+                        h * (-((x - cx - 0.5).powi(2) + (y - cy - 0.5).powi(2)) / 50.0).exp()
                     };
                     let i = maps.index(bin, u, v);
-                    maps.values[i] = bump(40.0, 60.0, 0.9)
-                        .max(bump(80.0, 70.0, 0.8 - bin as f32 * 0.01))
-                        .max(bump(64.0, 30.0, 0.7));
+                    let tilt = bin as f32 * 0.01;
+                    maps.values[i] = bump(40.0, 60.0, 0.9 - tilt)
+                        .max(bump(80.0, 70.0, 0.8 - tilt))
+                        .max(bump(64.0, 30.0, 0.7 - tilt));
                 }
             }
         }
@@ -456,7 +476,10 @@ mod tests {
         let grid = visualisation(&rotated, &maps, &choice);
         assert_eq!(grid.dimensions(), (512, 512));
         // Bin 3 sits in row 1, right half: its observation at x 256.., its map at x 384...
-        assert_eq!(grid.get_pixel(256 + 64, 128 + 64).0, rotated[3].get_pixel(64, 64).0);
+        assert_eq!(
+            grid.get_pixel(256 + 64, 128 + 64).0,
+            rotated[3].get_pixel(64, 64).0
+        );
         let expected = crate::render::viridis(maps.get(3, 10, 5));
         assert_eq!(grid.get_pixel(384 + 10, 128 + 5).0, expected);
     }

@@ -176,7 +176,11 @@ pub struct EvalArgs {
     #[arg(long, value_name = "LIST", value_parser = parse_seed_list)]
     pub seeds: Option<SeedList>,
     /// Failure suppression: lower the affordance around the last N failed actions (0 = off).
-    #[arg(long = "n_past_action", visible_alias = "n-past-action", default_value_t = 0)]
+    #[arg(
+        long = "n_past_action",
+        visible_alias = "n-past-action",
+        default_value_t = 0
+    )]
     pub n_past_action: usize,
     /// Suppression: standard deviation of the subtracted Gaussian in pixels.
     #[arg(long, default_value_t = 4.0, value_parser = positive)]
@@ -187,6 +191,9 @@ pub struct EvalArgs {
     /// Suppression: remember successful actions too, not only failures.
     #[arg(long)]
     pub suppress_successes: bool,
+    /// Model policy: do not zero the grasps whose open gripper would enter a tote wall.
+    #[arg(long)]
+    pub no_wall_mask: bool,
     /// empty_bin: most pick attempts per scene.
     #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
     pub max_attempts: u32,
@@ -222,10 +229,15 @@ pub struct SeedList(pub Vec<u64>);
 
 /// Parses `1-10`, `0,1000,2000` or a mix such as `1-3,7`.
 pub fn parse_seed_list(text: &str) -> Result<SeedList, String> {
-    let fail = |why: &str| format!("'{text}' {why}; use a list and/or ranges such as 1-10 or 0,1000,2000");
+    let fail =
+        |why: &str| format!("'{text}' {why}; use a list and/or ranges such as 1-10 or 0,1000,2000");
     let mut seeds = Vec::new();
     for part in text.split(',').map(str::trim) {
-        let number = |s: &str| s.trim().parse::<u64>().map_err(|_| fail(&format!("has '{s}', not a seed")));
+        let number = |s: &str| {
+            s.trim()
+                .parse::<u64>()
+                .map_err(|_| fail(&format!("has '{s}', not a seed")))
+        };
         match part.split_once('-') {
             Some((a, b)) => {
                 let (a, b) = (number(a)?, number(b)?);
@@ -447,13 +459,16 @@ mod tests {
         assert_eq!(parse_seed_list("1-3, 7").unwrap().0, [1, 2, 3, 7]);
         assert!(parse_seed_list("5-2").unwrap_err().contains("empty range"));
         assert!(parse_seed_list("1,x").unwrap_err().contains("'x'"));
-        assert!(parse_seed_list("1,2,1").unwrap_err().contains("repeats seed 1"));
+        assert!(parse_seed_list("1,2,1")
+            .unwrap_err()
+            .contains("repeats seed 1"));
         assert!(parse_seed_list("").is_err());
     }
 
     #[test]
     fn task_names_are_spelled_as_the_reference_spells_them() {
-        let names: Vec<String> = <Task as clap::ValueEnum>::value_variants()
+        use clap::ValueEnum;
+        let names: Vec<String> = Task::value_variants()
             .iter()
             .map(|t| t.to_possible_value().unwrap().get_name().to_owned())
             .collect();

@@ -24,3 +24,4 @@ pub mod sim;
 pub mod train;
 pub mod unet;
 pub mod urdf;
+pub mod workspace;

@@ -22,7 +22,10 @@ impl Rate {
     /// The rate and its interval. Wilson's interval stays inside [0, 1] and is sensible at 0 and
     /// at all successes, unlike the normal approximation, which matters at 15–90 trials.
     pub fn new(successes: usize, trials: usize) -> Self {
-        assert!(successes <= trials, "{successes} successes in {trials} trials");
+        assert!(
+            successes <= trials,
+            "{successes} successes in {trials} trials"
+        );
         if trials == 0 {
             return Self {
                 successes,

@@ -1,30 +1,9 @@
 //! The `graspmap` binary end to end: outputs, JSON reports and one-line errors with exit status 2.
 
 use std::path::Path;
-use std::process::{Command, Output};
+mod common;
 
-fn graspmap(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_graspmap"))
-        .args(args)
-        .env_remove("GRASPMAP_LOG")
-        .output()
-        .expect("running graspmap")
-}
-
-/// Asserts a user error: exit status 2 and a single stderr line that mentions every `needles`.
-fn assert_user_error(output: &Output, needles: &[&str]) {
-    let stderr = String::from_utf8_lossy(&output.stderr);
-    assert_eq!(output.status.code(), Some(2), "stderr: {stderr}");
-    assert!(!stderr.contains("panicked"), "panic: {stderr}");
-    assert_eq!(
-        stderr.trim_end().lines().count(),
-        1,
-        "not one line: {stderr}"
-    );
-    for needle in needles {
-        assert!(stderr.contains(needle), "{needle:?} missing from: {stderr}");
-    }
-}
+use common::{assert_user_error, graspmap};
 
 #[test]
 fn unknown_object_names_it_and_lists_the_known_ones() {

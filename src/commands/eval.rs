@@ -22,7 +22,10 @@ use crate::oracle::{self, OracleConfig};
 use crate::output::{save_gif_atomic, save_image_atomic, write_report};
 use crate::render::Frame;
 use crate::sim::pick::{PickOutcome, PickReason};
-use crate::sim::{ObjectLocation, Workcell, WorkcellConfig};
+use crate::sim::{
+    ObjectLocation, Workcell, WorkcellConfig, BIN1_CENTER, BIN_INNER_HALF, BIN_WALL_TOP,
+};
+use crate::workspace::{allowed_actions, GripperVolume, Tote};
 
 /// Attempts per object in the train and test tasks (ref).
 pub const ATTEMPTS_PER_OBJECT: u32 = 3;
@@ -150,7 +153,8 @@ pub struct EvalResults {
 
 /// Who chooses grasps, with what it needs.
 enum Policy {
-    Model(AffordanceModel),
+    /// The network, and whether grasps into the tote walls are masked out.
+    Model(AffordanceModel, Option<(Tote, GripperVolume)>),
     Random,
     Oracle,
 }
@@ -194,7 +198,11 @@ pub fn run(context: &Context, args: EvalArgs) -> anyhow::Result<()> {
     tch::set_num_threads(i32::from(context.threads));
     let precision = args.precision.resolve();
     let policy = match args.policy {
-        PolicyChoice::Model => Policy::Model(AffordanceModel::load(&checkpoint, precision)?),
+        PolicyChoice::Model => Policy::Model(
+            AffordanceModel::load(&checkpoint, precision)?,
+            (!args.no_wall_mask)
+                .then(|| (pick_tote(), GripperVolume::from(&OracleConfig::default()))),
+        ),
         PolicyChoice::Random => Policy::Random,
         PolicyChoice::Oracle => Policy::Oracle,
     };
@@ -272,6 +280,7 @@ pub fn run(context: &Context, args: EvalArgs) -> anyhow::Result<()> {
             "precision": (args.policy == PolicyChoice::Model).then_some(precision),
             "seeds": seeds,
             "suppression": suppression,
+            "wall_mask": args.policy == PolicyChoice::Model && !args.no_wall_mask,
             "max_attempts": args.max_attempts,
             "attempts_per_object": ATTEMPTS_PER_OBJECT,
             "objects": names,
@@ -305,7 +314,11 @@ impl Evaluation<'_> {
                 self.bar.set_message(format!(
                     "{} {}",
                     model.name,
-                    if record.success { "success" } else { record.reason.as_str() }
+                    if record.success {
+                        "success"
+                    } else {
+                        record.reason.as_str()
+                    }
                 ));
                 attempts.push(record);
             }
@@ -369,7 +382,7 @@ impl Evaluation<'_> {
     }
 
     fn vis_path(&self, seed: u64, file: &str) -> Option<PathBuf> {
-        if !matches!(self.policy, Policy::Model(_)) {
+        if !matches!(self.policy, Policy::Model(..)) {
             return None;
         }
         Some(if self.per_seed_vis {
@@ -481,10 +494,13 @@ fn decide(
     random_seed: u64,
 ) -> Decision {
     match policy {
-        Policy::Model(model) => {
+        Policy::Model(model, wall_mask) => {
             let start = Instant::now();
             let rotated = rotated_observations(rgb);
             let mut maps = model.predict(&rotated);
+            if let Some((tote, gripper)) = wall_mask {
+                maps.restrict(&allowed_actions(camera, frame, tote, gripper));
+            }
             memory.apply(&mut maps);
             let choice = maps.choose();
             let network_seconds = start.elapsed().as_secs_f64();
@@ -745,6 +761,15 @@ fn report_lines(results: &EvalResults, args: &EvalArgs) -> Vec<String> {
         t.total_wall
     ));
     lines
+}
+
+/// The pick tote's inside, from the workcell's layout.
+pub fn pick_tote() -> Tote {
+    Tote {
+        center: [BIN1_CENTER.x, BIN1_CENTER.y],
+        inner_half: BIN_INNER_HALF,
+        wall_top: BIN_WALL_TOP,
+    }
 }
 
 /// Where `predict` and `eval` find the model unless told otherwise.

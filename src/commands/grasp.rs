@@ -8,11 +8,11 @@ use rand_chacha::ChaCha8Rng;
 use rapier3d::math::Vector;
 
 use super::Context;
+use crate::affordance::draw_grasp;
 use crate::camera::Camera;
 use crate::cli::{parse_pixel, GraspArgs};
 use crate::grasp::{normalize_angle, world_grasp, PixelGrasp};
 use crate::oracle::{self, OracleConfig};
-use crate::affordance::draw_grasp;
 use crate::output::{save_gif_atomic, save_image_atomic, write_report};
 use crate::sim::pick::{PickOutcome, PickReason};
 use crate::sim::{Workcell, WorkcellConfig, BIN1_CENTER, BIN_FLOOR_TOP, BIN_INNER_HALF};

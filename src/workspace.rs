@@ -1,0 +1,223 @@
+//! Which grasps the workcell's fixed geometry rules out: a gripper that would enter a tote wall (known geometry, no object knowledge).
+//!
+//! The network never saw a wall up close (labels come from single objects dropped near the
+//! bin's middle), so in clutter it happily scores objects lying against a wall. Picking systems
+//! built on affordance maps mask such actions out before the argmax; this module computes that
+//! mask from the camera's depth and the tote's known box, nothing else.
+
+use rapier3d::math::Vector;
+
+use crate::augment::rotate_point;
+use crate::camera::Camera;
+use crate::dataset::{bin_angle, BINS};
+use crate::grasp::{world_grasp, PixelGrasp, WorldGrasp};
+use crate::oracle::OracleConfig;
+use crate::render::Frame;
+
+/// The inside of the pick tote.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Tote {
+    /// Centre of the floor (x, y), metres.
+    pub center: [f32; 2],
+    /// Half extents of the inner floor (x, y), metres.
+    pub inner_half: [f32; 2],
+    /// Height of the wall tops, metres.
+    pub wall_top: f32,
+}
+
+/// The gripper's volume below tool0, as boxes around the TCP.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct GripperVolume {
+    /// Distance between the open pads' inner faces (m).
+    pub opening: f32,
+    /// Finger thickness along the closing line (m).
+    pub finger_thickness: f32,
+    /// Finger width across the closing line (m).
+    pub finger_width: f32,
+    /// Height of the palm's lower face above the TCP (m).
+    pub palm_height: f32,
+    /// Palm half extent along the closing line (m).
+    pub palm_half_along: f32,
+    /// Palm half extent across the closing line (m).
+    pub palm_half_across: f32,
+    /// Clearance kept from the walls (m).
+    pub margin: f32,
+}
+
+impl From<&OracleConfig> for GripperVolume {
+    fn from(c: &OracleConfig) -> Self {
+        Self {
+            opening: c.opening,
+            finger_thickness: c.pad_thickness,
+            finger_width: c.pad_width,
+            palm_height: c.palm_height,
+            palm_half_along: c.palm_half_along,
+            palm_half_across: c.palm_half_across,
+            margin: 0.005,
+        }
+    }
+}
+
+/// True when the open gripper, lowered to this grasp, stays clear of the tote's walls: every
+/// box of it either lies inside the inner floor area or starts above the wall tops.
+pub fn clears_walls(grasp: &WorldGrasp, tote: &Tote, gripper: &GripperVolume) -> bool {
+    let along = Vector::new(grasp.closing.x, grasp.closing.y, 0.0).normalize_or_zero();
+    let across = Vector::new(-along.y, along.x, 0.0);
+    let finger_offset = gripper.opening / 2.0 + gripper.finger_thickness / 2.0;
+    // (centre offset along the closing line, half along, half across, bottom above the TCP)
+    let boxes = [
+        (
+            -finger_offset,
+            gripper.finger_thickness / 2.0,
+            gripper.finger_width / 2.0,
+            0.0,
+        ),
+        (
+            finger_offset,
+            gripper.finger_thickness / 2.0,
+            gripper.finger_width / 2.0,
+            0.0,
+        ),
+        (
+            0.0,
+            gripper.palm_half_along,
+            gripper.palm_half_across,
+            gripper.palm_height,
+        ),
+    ];
+    boxes
+        .iter()
+        .all(|&(offset, half_along, half_across, bottom)| {
+            if grasp.tcp.z + bottom > tote.wall_top + gripper.margin {
+                return true;
+            }
+            let centre = grasp.tcp + along * offset;
+            [(-1.0, -1.0), (-1.0, 1.0), (1.0, -1.0), (1.0, 1.0)]
+                .iter()
+                .all(|&(sa, sc): &(f32, f32)| {
+                    let corner = centre + along * (sa * half_along) + across * (sc * half_across);
+                    (corner.x - tote.center[0]).abs() <= tote.inner_half[0] - gripper.margin
+                        && (corner.y - tote.center[1]).abs() <= tote.inner_half[1] - gripper.margin
+                })
+        })
+}
+
+/// For each bin and rotated pixel, whether the grasp it stands for is allowed: its original
+/// pixel lies in the image (not in the black fill of the rotation) and the gripper clears the
+/// walls there. Same layout as [`crate::affordance::AffordanceMaps`].
+pub fn allowed_actions(
+    camera: &Camera,
+    frame: &Frame,
+    tote: &Tote,
+    gripper: &GripperVolume,
+) -> Vec<bool> {
+    let size = frame.width;
+    debug_assert_eq!(frame.width, frame.height);
+    let mut allowed = Vec::with_capacity(BINS * (size * size) as usize);
+    for bin in 0..BINS {
+        for v in 0..size {
+            for u in 0..size {
+                let [x, y] = rotate_point([u as f32 + 0.5, v as f32 + 0.5], bin_angle(bin), size);
+                let inside = (0.0..size as f32).contains(&x) && (0.0..size as f32).contains(&y);
+                allowed.push(
+                    inside && {
+                        let grasp = PixelGrasp {
+                            u: x as u32,
+                            v: y as u32,
+                            angle_deg: bin_angle(bin),
+                        };
+                        clears_walls(&world_grasp(camera, frame, grasp), tote, gripper)
+                    },
+                );
+            }
+        }
+    }
+    allowed
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn tote() -> Tote {
+        Tote {
+            center: [0.5, 0.0],
+            inner_half: [0.30, 0.40],
+            wall_top: 0.21,
+        }
+    }
+
+    fn grasp(x: f32, y: f32, z: f32, closing: Vector) -> WorldGrasp {
+        WorldGrasp {
+            tcp: Vector::new(x, y, z),
+            closing,
+        }
+    }
+
+    #[test]
+    fn the_gripper_clears_walls_in_the_middle_and_above_them_but_not_beside_them() {
+        let gripper = GripperVolume::from(&OracleConfig::default());
+        let t = tote();
+        assert!(clears_walls(
+            &grasp(0.5, 0.0, 0.03, Vector::X),
+            &t,
+            &gripper
+        ));
+        // 3 cm from the +x wall: closing along x puts a finger into it, and closing along y
+        // the palm's 3.5 cm half width across does not fit either.
+        let near = 0.8 - 0.03;
+        assert!(!clears_walls(
+            &grasp(near, 0.0, 0.03, Vector::X),
+            &t,
+            &gripper
+        ));
+        assert!(!clears_walls(
+            &grasp(near, 0.0, 0.03, Vector::Y),
+            &t,
+            &gripper
+        ));
+        // 6 cm away, closing along the wall: fingers 1.1 cm and palm 3.5 cm across fit.
+        let off = 0.8 - 0.06;
+        assert!(clears_walls(
+            &grasp(off, 0.0, 0.03, Vector::Y),
+            &t,
+            &gripper
+        ));
+        assert!(!clears_walls(
+            &grasp(off, 0.0, 0.03, Vector::X),
+            &t,
+            &gripper
+        ));
+        // On a tall object the fingers end above the wall tops.
+        assert!(clears_walls(
+            &grasp(near, 0.0, 0.25, Vector::X),
+            &t,
+            &gripper
+        ));
+    }
+
+    #[test]
+    fn pixels_rotated_in_from_outside_the_image_are_never_allowed() {
+        let camera = Camera::top_down();
+        // Everything at the depth of the bin floor's middle.
+        let floor = camera.project(Vector::new(0.5, 0.0, 0.02)).unwrap()[2];
+        let frame = Frame {
+            width: 128,
+            height: 128,
+            rgb: vec![0; 3 * 128 * 128],
+            depth: vec![floor; 128 * 128],
+            mask: vec![0; 128 * 128],
+        };
+        let allowed = allowed_actions(
+            &camera,
+            &frame,
+            &tote(),
+            &GripperVolume::from(&OracleConfig::default()),
+        );
+        let plane = 128 * 128;
+        // Bin 2 (45°): the rotated image's corner comes from outside the original.
+        assert!(!allowed[2 * plane]);
+        assert!(allowed.iter().any(|&a| a));
+        assert!(allowed[..plane].iter().filter(|&&a| a).count() > plane / 4);
+    }
+}
