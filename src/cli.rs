@@ -191,9 +191,10 @@ pub struct EvalArgs {
     /// Suppression: remember successful actions too, not only failures.
     #[arg(long)]
     pub suppress_successes: bool,
-    /// Model policy: do not zero the grasps whose open gripper would enter a tote wall.
-    #[arg(long)]
-    pub no_wall_mask: bool,
+    /// Model policy: before the argmax, zero the grasps whose open gripper would hit a tote wall
+    /// (walls) or also land on a surface seen in the depth image (full); off = plain argmax.
+    #[arg(long, value_enum, default_value_t = crate::workspace::CollisionCheck::Full)]
+    pub collision_check: crate::workspace::CollisionCheck,
     /// empty_bin: most pick attempts per scene.
     #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
     pub max_attempts: u32,
@@ -463,6 +464,19 @@ mod tests {
             .unwrap_err()
             .contains("repeats seed 1"));
         assert!(parse_seed_list("").is_err());
+    }
+
+    #[test]
+    fn n_past_action_takes_both_spellings() {
+        for flag in ["--n_past_action", "--n-past-action"] {
+            let cli = Cli::try_parse_from(["graspmap", "eval", "--task", "empty_bin", flag, "8"])
+                .unwrap();
+            let Command::Eval(args) = cli.command else {
+                panic!("parsed as another command")
+            };
+            assert_eq!(args.n_past_action, 8);
+            assert_eq!(args.task, Task::EmptyBin);
+        }
     }
 
     #[test]

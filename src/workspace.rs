@@ -1,9 +1,11 @@
-//! Which grasps the workcell's fixed geometry rules out: a gripper that would enter a tote wall (known geometry, no object knowledge).
+//! Which grasps collide before they close: the open gripper entering a tote wall (known box) or landing on a surface the depth image shows.
 //!
-//! The network never saw a wall up close (labels come from single objects dropped near the
-//! bin's middle), so in clutter it happily scores objects lying against a wall. Picking systems
-//! built on affordance maps mask such actions out before the argmax; this module computes that
-//! mask from the camera's depth and the tote's known box, nothing else.
+//! The network never saw a wall or a neighbour up close (labels come from single objects
+//! dropped near the bin's middle), so in clutter it happily scores grasps whose fingers would
+//! come down on a wall or on another object, and the arm's protective stop ends them. Deployed
+//! grasping systems check candidate grasps against the tote model and the depth image before
+//! executing; this module builds that mask from the camera's depth and the tote's known box
+//! only: no object identities, no ground-truth masks.
 
 use rapier3d::math::Vector;
 
@@ -102,15 +104,105 @@ pub fn clears_walls(grasp: &WorldGrasp, tote: &Tote, gripper: &GripperVolume) ->
         })
 }
 
+/// How strictly candidate grasps are checked before the argmax.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
+#[serde(rename_all = "snake_case")]
+pub enum CollisionCheck {
+    /// Walls, and the fingers and palm against the surfaces in the depth image.
+    Full,
+    /// Only the tote's walls.
+    Walls,
+    /// None: the plain argmax of SPEC §8.
+    Off,
+}
+
+/// How far above the TCP a seen surface under a finger may be (m): the depth image's noise-free
+/// but 8 mm pixels blur edges by about this much.
+pub const LANDING_TOLERANCE: f32 = 0.005;
+
+/// World height of the surface seen at each pixel.
+pub struct HeightMap {
+    size: u32,
+    heights: Vec<f32>,
+}
+
+impl HeightMap {
+    /// Back-projects the frame's depth.
+    pub fn new(camera: &Camera, frame: &Frame) -> Self {
+        let mut heights = Vec::with_capacity((frame.width * frame.height) as usize);
+        for v in 0..frame.height {
+            for u in 0..frame.width {
+                heights.push(camera.pixel_to_world(u, v, frame.depth_at(u, v)).z);
+            }
+        }
+        Self {
+            size: frame.width,
+            heights,
+        }
+    }
+
+    /// The surface height seen where `p` projects; `None` outside the image.
+    fn under(&self, camera: &Camera, p: Vector) -> Option<f32> {
+        let [u, v, _] = camera.project(p)?;
+        let inside = |c: f32| (0.0..self.size as f32).contains(&c);
+        (inside(u) && inside(v)).then(|| self.heights[(v as u32 * self.size + u as u32) as usize])
+    }
+}
+
+/// True when, lowered to the grasp, neither finger nor the palm would come down on a surface
+/// the camera sees: under each finger's footprint nothing rises above the TCP (plus
+/// [`LANDING_TOLERANCE`]), under the palm nothing above its lower face.
+pub fn lands_clear(
+    grasp: &WorldGrasp,
+    heights: &HeightMap,
+    camera: &Camera,
+    gripper: &GripperVolume,
+) -> bool {
+    let along = Vector::new(grasp.closing.x, grasp.closing.y, 0.0).normalize_or_zero();
+    let across = Vector::new(-along.y, along.x, 0.0);
+    let finger_offset = gripper.opening / 2.0 + gripper.finger_thickness / 2.0;
+    let blocked = |point: Vector, limit: f32| {
+        heights
+            .under(camera, point)
+            .is_some_and(|h| h > limit + LANDING_TOLERANCE)
+    };
+    for side in [-1.0f32, 1.0] {
+        for i in [-1.0f32, 0.0, 1.0] {
+            for j in [-1.0f32, 0.0, 1.0] {
+                let point = grasp.tcp
+                    + along * (side * finger_offset + i * gripper.finger_thickness / 2.0)
+                    + across * (j * gripper.finger_width / 2.0);
+                if blocked(point, grasp.tcp.z) {
+                    return false;
+                }
+            }
+        }
+    }
+    let palm_bottom = grasp.tcp.z + gripper.palm_height;
+    for i in [-1.0f32, -0.5, 0.0, 0.5, 1.0] {
+        for j in [-1.0f32, 0.0, 1.0] {
+            let point = grasp.tcp
+                + along * (i * gripper.palm_half_along)
+                + across * (j * gripper.palm_half_across);
+            if blocked(point, palm_bottom) {
+                return false;
+            }
+        }
+    }
+    true
+}
+
 /// For each bin and rotated pixel, whether the grasp it stands for is allowed: its original
-/// pixel lies in the image (not in the black fill of the rotation) and the gripper clears the
-/// walls there. Same layout as [`crate::affordance::AffordanceMaps`].
+/// pixel lies in the image (not in the black fill of the rotation) and it passes `check`.
+/// Same layout as [`crate::affordance::AffordanceMaps`].
 pub fn allowed_actions(
     camera: &Camera,
     frame: &Frame,
     tote: &Tote,
     gripper: &GripperVolume,
+    check: CollisionCheck,
 ) -> Vec<bool> {
+    let heights = (check == CollisionCheck::Full).then(|| HeightMap::new(camera, frame));
     let size = frame.width;
     debug_assert_eq!(frame.width, frame.height);
     let mut allowed = Vec::with_capacity(BINS * (size * size) as usize);
@@ -126,7 +218,12 @@ pub fn allowed_actions(
                             v: y as u32,
                             angle_deg: bin_angle(bin),
                         };
-                        clears_walls(&world_grasp(camera, frame, grasp), tote, gripper)
+                        let world = world_grasp(camera, frame, grasp);
+                        check == CollisionCheck::Off
+                            || (clears_walls(&world, tote, gripper)
+                                && heights
+                                    .as_ref()
+                                    .is_none_or(|h| lands_clear(&world, h, camera, gripper)))
                     },
                 );
             }
@@ -213,6 +310,7 @@ mod tests {
             &frame,
             &tote(),
             &GripperVolume::from(&OracleConfig::default()),
+            CollisionCheck::Full,
         );
         let plane = 128 * 128;
         // Bin 2 (45°): the rotated image's corner comes from outside the original.

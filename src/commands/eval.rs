@@ -25,7 +25,7 @@ use crate::sim::pick::{PickOutcome, PickReason};
 use crate::sim::{
     ObjectLocation, Workcell, WorkcellConfig, BIN1_CENTER, BIN_INNER_HALF, BIN_WALL_TOP,
 };
-use crate::workspace::{allowed_actions, GripperVolume, Tote};
+use crate::workspace::{allowed_actions, CollisionCheck, GripperVolume, Tote};
 
 /// Attempts per object in the train and test tasks (ref).
 pub const ATTEMPTS_PER_OBJECT: u32 = 3;
@@ -153,8 +153,8 @@ pub struct EvalResults {
 
 /// Who chooses grasps, with what it needs.
 enum Policy {
-    /// The network, and whether grasps into the tote walls are masked out.
-    Model(AffordanceModel, Option<(Tote, GripperVolume)>),
+    /// The network, and how candidate grasps are checked for collisions.
+    Model(Box<AffordanceModel>, CollisionCheck),
     Random,
     Oracle,
 }
@@ -199,9 +199,8 @@ pub fn run(context: &Context, args: EvalArgs) -> anyhow::Result<()> {
     let precision = args.precision.resolve();
     let policy = match args.policy {
         PolicyChoice::Model => Policy::Model(
-            AffordanceModel::load(&checkpoint, precision)?,
-            (!args.no_wall_mask)
-                .then(|| (pick_tote(), GripperVolume::from(&OracleConfig::default()))),
+            Box::new(AffordanceModel::load(&checkpoint, precision)?),
+            args.collision_check,
         ),
         PolicyChoice::Random => Policy::Random,
         PolicyChoice::Oracle => Policy::Oracle,
@@ -280,7 +279,7 @@ pub fn run(context: &Context, args: EvalArgs) -> anyhow::Result<()> {
             "precision": (args.policy == PolicyChoice::Model).then_some(precision),
             "seeds": seeds,
             "suppression": suppression,
-            "wall_mask": args.policy == PolicyChoice::Model && !args.no_wall_mask,
+            "collision_check": (args.policy == PolicyChoice::Model).then_some(args.collision_check),
             "max_attempts": args.max_attempts,
             "attempts_per_object": ATTEMPTS_PER_OBJECT,
             "objects": names,
@@ -494,12 +493,19 @@ fn decide(
     random_seed: u64,
 ) -> Decision {
     match policy {
-        Policy::Model(model, wall_mask) => {
+        Policy::Model(model, check) => {
             let start = Instant::now();
             let rotated = rotated_observations(rgb);
             let mut maps = model.predict(&rotated);
-            if let Some((tote, gripper)) = wall_mask {
-                maps.restrict(&allowed_actions(camera, frame, tote, gripper));
+            if *check != CollisionCheck::Off {
+                let gripper = GripperVolume::from(&OracleConfig::default());
+                maps.restrict(&allowed_actions(
+                    camera,
+                    frame,
+                    &pick_tote(),
+                    &gripper,
+                    *check,
+                ));
             }
             memory.apply(&mut maps);
             let choice = maps.choose();
