@@ -130,20 +130,21 @@ pub struct SuppressionConfig {
     pub remember: usize,
     /// Standard deviation of the subtracted Gaussian, in pixels.
     pub sigma_px: f32,
-    /// Lower only the past action's own rotation (true) or every rotation (false).
-    pub per_rotation: bool,
+    /// Lower the rotations within this many bins of the past action's (circularly, 22.5° each):
+    /// 0 = its own rotation only, 4 = all 8.
+    pub rotation_reach: usize,
     /// Whether successful actions enter the memory too.
     pub remember_successes: bool,
 }
 
 impl Default for SuppressionConfig {
-    /// The measured choice (BENCHMARKS.md, "Failure suppression"): σ = 4 px over all rotations,
-    /// failures only.
+    /// The measured choice (BENCHMARKS.md, "Failure suppression"): σ = 4 px, the failed
+    /// rotation only, failures only; `remember` 0 (off) until the user asks.
     fn default() -> Self {
         Self {
             remember: 0,
             sigma_px: 4.0,
-            per_rotation: false,
+            rotation_reach: 0,
             remember_successes: false,
         }
     }
@@ -191,7 +192,8 @@ impl Suppression {
         for past in &self.past {
             let centre = [past.grasp.u as f32 + 0.5, past.grasp.v as f32 + 0.5];
             for bin in 0..BINS {
-                if self.config.per_rotation && bin != past.bin {
+                let apart = (bin + BINS - past.bin) % BINS;
+                if apart.min(BINS - apart) > self.config.rotation_reach {
                     continue;
                 }
                 let [cx, cy] = rotate_point(centre, -bin_angle(bin), size);
@@ -378,11 +380,11 @@ mod tests {
 
     #[test]
     fn with_one_remembered_action_the_same_pixel_is_never_chosen_twice_in_a_row() {
-        for per_rotation in [false, true] {
+        for rotation_reach in [0, 1, 4] {
             let raw = bumpy_maps();
             let mut memory = Suppression::new(SuppressionConfig {
                 remember: 1,
-                per_rotation,
+                rotation_reach,
                 ..SuppressionConfig::default()
             });
             let mut previous: Option<Choice> = None;
@@ -393,7 +395,7 @@ mod tests {
                 if let Some(p) = previous {
                     assert!(
                         (p.bin, p.rotated) != (choice.bin, choice.rotated),
-                        "per_rotation {per_rotation}: chose {choice:?} twice in a row"
+                        "rotation_reach {rotation_reach}: chose {choice:?} twice in a row"
                     );
                 }
                 memory.record(choice, false);
@@ -407,6 +409,7 @@ mod tests {
         let raw = bumpy_maps();
         let mut memory = Suppression::new(SuppressionConfig {
             remember: 2,
+            rotation_reach: 4,
             ..SuppressionConfig::default()
         });
         let first = raw.choose();
@@ -450,20 +453,23 @@ mod tests {
     }
 
     #[test]
-    fn per_rotation_suppression_leaves_other_bins_alone() {
+    fn suppression_reaches_only_the_nearby_rotations() {
         let raw = bumpy_maps();
         let first = raw.choose();
-        let mut memory = Suppression::new(SuppressionConfig {
-            remember: 1,
-            per_rotation: true,
-            ..SuppressionConfig::default()
-        });
-        memory.record(first, false);
-        let mut maps = raw.clone();
-        memory.apply(&mut maps);
-        for bin in 0..BINS {
-            let changed = maps.map(bin) != raw.map(bin);
-            assert_eq!(changed, bin == first.bin, "bin {bin}");
+        assert_eq!(first.bin, 0, "the tilt favours bin 0");
+        for (reach, lowered) in [(0, vec![0]), (1, vec![0, 1, 7]), (4, (0..BINS).collect())] {
+            let mut memory = Suppression::new(SuppressionConfig {
+                remember: 1,
+                rotation_reach: reach,
+                ..SuppressionConfig::default()
+            });
+            memory.record(first, false);
+            let mut maps = raw.clone();
+            memory.apply(&mut maps);
+            for bin in 0..BINS {
+                let changed = maps.map(bin) != raw.map(bin);
+                assert_eq!(changed, lowered.contains(&bin), "reach {reach}, bin {bin}");
+            }
         }
     }
 

@@ -185,9 +185,10 @@ pub struct EvalArgs {
     /// Suppression: standard deviation of the subtracted Gaussian in pixels.
     #[arg(long, default_value_t = 4.0, value_parser = positive)]
     pub suppression_sigma: f32,
-    /// Suppression: lower only the failed action's own rotation, not all 8.
-    #[arg(long)]
-    pub suppress_per_rotation: bool,
+    /// Suppression: also lower the rotations within this many 22.5° bins of the failed one
+    /// (0 = its own rotation only, 4 = all).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=4))]
+    pub suppress_rotation_reach: u8,
     /// Suppression: remember successful actions too, not only failures.
     #[arg(long)]
     pub suppress_successes: bool,

@@ -219,7 +219,7 @@ pub fn run(context: &Context, args: EvalArgs) -> anyhow::Result<()> {
     let suppression = SuppressionConfig {
         remember: args.n_past_action,
         sigma_px: args.suppression_sigma,
-        per_rotation: args.suppress_per_rotation,
+        rotation_reach: usize::from(args.suppress_rotation_reach),
         remember_successes: args.suppress_successes,
     };
     let vis_dir = context.data.join("affordance").join(match args.task {
