@@ -25,6 +25,8 @@ pub struct Tote {
     pub inner_half: [f32; 2],
     /// Height of the wall tops, metres.
     pub wall_top: f32,
+    /// Height of the floor's top surface, metres.
+    pub floor_top: f32,
 }
 
 /// The gripper's volume below tool0, as boxes around the TCP.
@@ -108,7 +110,8 @@ pub fn clears_walls(grasp: &WorldGrasp, tote: &Tote, gripper: &GripperVolume) ->
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, clap::ValueEnum)]
 #[serde(rename_all = "snake_case")]
 pub enum CollisionCheck {
-    /// Walls, and the fingers and palm against the surfaces in the depth image.
+    /// Walls; the fingers and palm against the surfaces in the depth image; and the grasp
+    /// centre on something, not on bare floor.
     Full,
     /// Only the tote's walls.
     Walls,
@@ -119,6 +122,10 @@ pub enum CollisionCheck {
 /// How far above the TCP a seen surface under a finger may be (m): the depth image's noise-free
 /// but 8 mm pixels blur edges by about this much.
 pub const LANDING_TOLERANCE: f32 = 0.005;
+
+/// A grasp centre whose surface is lower than this above the tote floor is on bare floor, where
+/// the pads can only close on the edge of whatever lies beside it (m).
+pub const ON_OBJECT_HEIGHT: f32 = 0.005;
 
 /// World height of the surface seen at each pixel.
 pub struct HeightMap {
@@ -139,6 +146,11 @@ impl HeightMap {
             size: frame.width,
             heights,
         }
+    }
+
+    /// The surface height seen at pixel (`u`, `v`).
+    pub fn at(&self, u: u32, v: u32) -> f32 {
+        self.heights[(v * self.size + u) as usize]
     }
 
     /// The surface height seen where `p` projects; `None` outside the image.
@@ -193,7 +205,8 @@ pub fn lands_clear(
 }
 
 /// For each bin and rotated pixel, whether the grasp it stands for is allowed: its original
-/// pixel lies in the image (not in the black fill of the rotation) and it passes `check`.
+/// pixel lies in the image (not in the black fill of the rotation) and it passes `check`
+/// (for `Full`: the walls, [`lands_clear`], and a centre above [`ON_OBJECT_HEIGHT`]).
 /// Same layout as [`crate::affordance::AffordanceMaps`].
 pub fn allowed_actions(
     camera: &Camera,
@@ -219,8 +232,12 @@ pub fn allowed_actions(
                             angle_deg: bin_angle(bin),
                         };
                         let world = world_grasp(camera, frame, grasp);
+                        let on_floor = heights.as_ref().is_some_and(|h| {
+                            h.at(grasp.u, grasp.v) < tote.floor_top + ON_OBJECT_HEIGHT
+                        });
                         check == CollisionCheck::Off
-                            || (clears_walls(&world, tote, gripper)
+                            || (!on_floor
+                                && clears_walls(&world, tote, gripper)
                                 && heights
                                     .as_ref()
                                     .is_none_or(|h| lands_clear(&world, h, camera, gripper)))
@@ -241,6 +258,7 @@ mod tests {
             center: [0.5, 0.0],
             inner_half: [0.30, 0.40],
             wall_top: 0.21,
+            floor_top: 0.02,
         }
     }
 
@@ -293,24 +311,63 @@ mod tests {
         ));
     }
 
-    #[test]
-    fn pixels_rotated_in_from_outside_the_image_are_never_allowed() {
-        let camera = Camera::top_down();
-        // Everything at the depth of the bin floor's middle.
-        let floor = camera.project(Vector::new(0.5, 0.0, 0.02)).unwrap()[2];
-        let frame = Frame {
+    /// A frame of the empty tote floor, with an optional 5 cm tall block of `half` pixels around
+    /// the image centre, seen by the top-down camera.
+    fn floor_frame(camera: &Camera, block_half: Option<u32>) -> Frame {
+        let mut depth = Vec::new();
+        for v in 0..128u32 {
+            for u in 0..128u32 {
+                let on_block =
+                    block_half.is_some_and(|h| u.abs_diff(64) <= h && v.abs_diff(64) <= h);
+                let z = if on_block { 0.07 } else { 0.02 };
+                // The depth at which pixel (u, v)'s ray meets height z.
+                let far = camera.pixel_to_world(u, v, 1.0);
+                let eye = camera.eye();
+                depth.push((eye.z - z) / (eye.z - far.z));
+            }
+        }
+        Frame {
             width: 128,
             height: 128,
             rgb: vec![0; 3 * 128 * 128],
-            depth: vec![floor; 128 * 128],
+            depth,
             mask: vec![0; 128 * 128],
+        }
+    }
+
+    #[test]
+    fn full_checks_allow_a_free_standing_block_and_nothing_on_bare_floor() {
+        let camera = Camera::top_down();
+        let gripper = GripperVolume::from(&OracleConfig::default());
+        let allowed = |frame: &Frame| {
+            allowed_actions(&camera, frame, &tote(), &gripper, CollisionCheck::Full)
         };
+        assert!(!allowed(&floor_frame(&camera, None)).iter().any(|&a| a));
+        // A 3 × 3 px (about 26 mm) block fits between the pads at every angle.
+        let block = allowed(&floor_frame(&camera, Some(1)));
+        let plane = 128 * 128;
+        for bin in 0..BINS {
+            let [x, y] = rotate_point([64.5, 64.5], -bin_angle(bin), 128);
+            assert!(
+                block[bin * plane + y as usize * 128 + x as usize],
+                "bin {bin}"
+            );
+        }
+        // A 21 px (18 cm) block is wider than the jaw: its centre is never a grasp.
+        let wide = allowed(&floor_frame(&camera, Some(10)));
+        assert!((0..BINS).all(|bin| !wide[bin * plane + 64 * 128 + 64]));
+    }
+
+    #[test]
+    fn pixels_rotated_in_from_outside_the_image_are_never_allowed() {
+        let camera = Camera::top_down();
+        let frame = floor_frame(&camera, None);
         let allowed = allowed_actions(
             &camera,
             &frame,
             &tote(),
             &GripperVolume::from(&OracleConfig::default()),
-            CollisionCheck::Full,
+            CollisionCheck::Walls,
         );
         let plane = 128 * 128;
         // Bin 2 (45°): the rotated image's corner comes from outside the original.

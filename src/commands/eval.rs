@@ -23,7 +23,8 @@ use crate::output::{save_gif_atomic, save_image_atomic, write_report};
 use crate::render::Frame;
 use crate::sim::pick::{PickOutcome, PickReason};
 use crate::sim::{
-    ObjectLocation, Workcell, WorkcellConfig, BIN1_CENTER, BIN_INNER_HALF, BIN_WALL_TOP,
+    ObjectLocation, Workcell, WorkcellConfig, BIN1_CENTER, BIN_FLOOR_TOP, BIN_INNER_HALF,
+    BIN_WALL_TOP,
 };
 use crate::workspace::{allowed_actions, CollisionCheck, GripperVolume, Tote};
 
@@ -66,6 +67,9 @@ pub struct AttemptRecord {
     pub reason: PickReason,
     /// Human-readable detail.
     pub detail: String,
+    /// The object whose surface the camera saw at the grasp centre (ground truth, for the
+    /// report only; no policy sees it).
+    pub aimed_at: Option<String>,
     /// The object that was held, if any.
     pub held: Option<String>,
     /// empty_bin: objects in bin 2 after this attempt.
@@ -435,6 +439,13 @@ impl Evaluation<'_> {
             }
             _ => None,
         };
+        let aimed_at = decision.grasp.as_ref().ok().and_then(|g| {
+            let id = frame.id_at(g.u, g.v);
+            cell.objects()
+                .iter()
+                .find(|o| o.id == id)
+                .map(|o| o.model.name.clone())
+        });
         if self.recording.is_some() {
             cell.start_recording(record_camera(), RECORD_EVERY_STEPS);
         }
@@ -468,6 +479,7 @@ impl Evaluation<'_> {
             success: outcome.success,
             reason: outcome.reason,
             detail: outcome.detail,
+            aimed_at,
             held: outcome.object,
             moved: None,
             vis: vis_written,
@@ -775,6 +787,7 @@ pub fn pick_tote() -> Tote {
         center: [BIN1_CENTER.x, BIN1_CENTER.y],
         inner_half: BIN_INNER_HALF,
         wall_top: BIN_WALL_TOP,
+        floor_top: BIN_FLOOR_TOP,
     }
 }
 
