@@ -1,8 +1,9 @@
 //! graspmap: learn top-down grasps for a simulated UR5 from a few dozen labels (spatial action maps).
 //!
 //! Layers, one way only: the pure core (`camera`, `render`, `grasp`, `kinematics`, `oracle`,
-//! `augment`) does no I/O; `unet` and `train` are the model (tch, no rapier); `urdf` and `objects` read model files; `sim` is the rapier workcell; `commands` and
-//! `cli` orchestrate.
+//! `augment`, `dataset` but for `load_dataset`, `affordance`, `workspace`, `metrics`) does no I/O; `unet`, `train` and
+//! `inference` are the model (tch, no rapier); `urdf` and `objects` read model files; `sim` is
+//! the rapier workcell (no tch); `commands` and `cli` orchestrate.
 
 pub mod affordance;
 pub mod augment;
