@@ -7,7 +7,7 @@ use std::time::Instant;
 use anyhow::Context as _;
 use image::RgbImage;
 
-use super::grasp::{random_grasp, record_camera, RECORD_DELAY_CS, RECORD_EVERY_STEPS};
+use super::grasp::{random_grasp, record_camera};
 use super::Context;
 use crate::affordance::{
     draw_grasp, rotated_observations, visualisation, Choice, Suppression, SuppressionConfig,
@@ -32,6 +32,11 @@ use crate::workspace::{allowed_actions, CollisionCheck, GripperVolume, Tote};
 pub const ATTEMPTS_PER_OBJECT: u32 = 3;
 /// Offset of the train/test drop seeds (ref): seed + 100·i + a + 10000.
 pub const SINGLE_OBJECT_SEED_OFFSET: u64 = 10_000;
+/// Physics steps between episode video frames: 10 fps, so that a 25-attempt episode stays
+/// near 15 MB (`grasp --record` films one attempt at 24 fps).
+pub const EPISODE_EVERY_STEPS: u64 = 24;
+/// GIF frame delay matching [`EPISODE_EVERY_STEPS`] at 240 Hz, in hundredths of a second.
+pub const EPISODE_DELAY_CS: u32 = 10;
 /// The default empty_bin scene (ref).
 pub const DEFAULT_EMPTY_BIN_SEED: u64 = 2;
 
@@ -258,7 +263,7 @@ pub fn run(context: &Context, args: EvalArgs) -> anyhow::Result<()> {
     }
     evaluation.bar.finish_and_clear();
     if let (Some(path), Some(frames)) = (&args.record, &evaluation.recording) {
-        save_gif_atomic(frames, RECORD_DELAY_CS, path)
+        save_gif_atomic(frames, EPISODE_DELAY_CS, path)
             .with_context(|| format!("writing --record {}", path.display()))?;
         context.say(&format!("wrote the episode video to {}", path.display()));
     }
@@ -447,7 +452,7 @@ impl Evaluation<'_> {
                 .map(|o| o.model.name.clone())
         });
         if self.recording.is_some() {
-            cell.start_recording(record_camera(), RECORD_EVERY_STEPS);
+            cell.start_recording(record_camera(), EPISODE_EVERY_STEPS);
         }
         let sim_start = Instant::now();
         let outcome = match &decision.grasp {
