@@ -262,3 +262,35 @@ fn bad_inputs_are_one_line_errors_with_exit_status_2() {
     let out = checkpoint.run(&["predict", "--image", "/nonexistent/photo.png"]);
     assert_user_error(&out, &["/nonexistent/photo.png"]);
 }
+
+#[test]
+fn record_writes_the_episode_beside_the_camera_view() {
+    let setup = Setup::new();
+    let gif = setup.path("episode.gif");
+    let out = setup.run(&[
+        "eval",
+        "--task",
+        "empty_bin",
+        "--policy",
+        "oracle",
+        "--max-attempts",
+        "1",
+        "--record",
+        gif.to_str().unwrap(),
+    ]);
+    assert_ok(&out);
+    let decoder = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
+        std::fs::File::open(&gif).unwrap(),
+    ))
+    .unwrap();
+    let frames = image::AnimationDecoder::into_frames(decoder)
+        .collect_frames()
+        .unwrap();
+    assert!(frames.len() > 10, "{} frames", frames.len());
+    // The oblique view (320 × 240) and the camera view scaled to 240 × 240.
+    assert_eq!(frames[0].buffer().dimensions(), (560, 240));
+    let out = setup.run(&[
+        "eval", "--task", "test", "--seeds", "1-2", "--record", "x.gif",
+    ]);
+    assert_user_error(&out, &["--record", "--seeds"]);
+}
