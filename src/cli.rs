@@ -179,11 +179,12 @@ pub struct EvalArgs {
     #[arg(
         long = "n_past_action",
         visible_alias = "n-past-action",
+        value_name = "N",
         default_value_t = 0
     )]
     pub n_past_action: usize,
     /// Suppression: standard deviation of the subtracted Gaussian in pixels.
-    #[arg(long, default_value_t = 4.0, value_parser = positive)]
+    #[arg(long, value_name = "PX", default_value_t = 4.0, value_parser = positive)]
     pub suppression_sigma: f32,
     /// Suppression: also lower the rotations within this many 22.5° bins of the failed one
     /// (0 = its own rotation only, 4 = all).
