@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context as _;
+use clap::ValueEnum as _;
 use image::RgbImage;
 
 use super::grasp::{random_grasp, record_camera};
@@ -200,10 +201,7 @@ pub fn run(context: &Context, args: EvalArgs) -> anyhow::Result<()> {
         (None, None) if args.task == Task::EmptyBin => vec![DEFAULT_EMPTY_BIN_SEED],
         (None, None) => vec![0],
     };
-    let checkpoint = args
-        .checkpoint
-        .clone()
-        .unwrap_or_else(|| default_checkpoint(&context.data));
+    let checkpoint = checkpoint_path(context, args.checkpoint.as_deref());
     tch::set_num_threads(i32::from(context.threads));
     let precision = args.precision.resolve();
     let policy = match args.policy {
@@ -457,14 +455,7 @@ impl Evaluation<'_> {
         let sim_start = Instant::now();
         let outcome = match &decision.grasp {
             Ok(g) => cell.pick(&world_grasp(&self.camera, &frame, *g)),
-            Err(why) => PickOutcome {
-                success: false,
-                reason: PickReason::Ungraspable,
-                detail: why.clone(),
-                object: None,
-                placed: None,
-                sim_seconds: 0.0,
-            },
+            Err(why) => PickOutcome::failure(PickReason::Ungraspable, why.clone()),
         };
         let sim = sim_start.elapsed().as_secs_f64();
         if let Some(frames) = &mut self.recording {
@@ -697,16 +688,11 @@ fn report_lines(results: &EvalResults, args: &EvalArgs) -> Vec<String> {
     } else {
         format!(", n_past_action {}", args.n_past_action)
     };
-    let policy = match results.policy {
-        PolicyChoice::Model => "model",
-        PolicyChoice::Random => "random",
-        PolicyChoice::Oracle => "oracle",
+    let name = |value: Option<clap::builder::PossibleValue>| {
+        value.map_or_else(String::new, |v| v.get_name().to_owned())
     };
-    let task = match results.task {
-        Task::Train => "train",
-        Task::Test => "test",
-        Task::EmptyBin => "empty_bin",
-    };
+    let policy = name(results.policy.to_possible_value());
+    let task = name(results.task.to_possible_value());
     lines.push(format!(
         "eval --task {task}, policy {policy}, seed {seeds}{suppression}"
     ));
@@ -796,7 +782,10 @@ pub fn pick_tote() -> Tote {
     }
 }
 
-/// Where `predict` and `eval` find the model unless told otherwise.
-pub fn default_checkpoint(data: &Path) -> PathBuf {
-    data.join("affordance").join("best.safetensors")
+/// The `--checkpoint` given, or where `predict` and `eval` find the model by default.
+pub fn checkpoint_path(context: &Context, given: Option<&Path>) -> PathBuf {
+    given.map_or_else(
+        || context.data.join("affordance").join("best.safetensors"),
+        Path::to_path_buf,
+    )
 }

@@ -118,14 +118,7 @@ pub fn run(context: &Context, args: GraspArgs) -> anyhow::Result<()> {
     }
     let outcome = match &choice {
         Ok(g) => cell.pick(&world_grasp(&camera, &frame, *g)),
-        Err(why) => PickOutcome {
-            success: false,
-            reason: PickReason::Ungraspable,
-            detail: why.clone(),
-            object: None,
-            placed: None,
-            sim_seconds: 0.0,
-        },
+        Err(why) => PickOutcome::failure(PickReason::Ungraspable, why.clone()),
     };
     if let Some(path) = &args.record {
         let frames = cell.take_recording();

@@ -5,7 +5,7 @@ use std::path::Path;
 use anyhow::{bail, Context as _};
 use image::RgbImage;
 
-use super::eval::default_checkpoint;
+use super::eval::checkpoint_path;
 use super::Context;
 use crate::affordance::{rotated_observations, visualisation, Choice};
 use crate::cli::PredictArgs;
@@ -37,10 +37,7 @@ pub struct PredictResults {
 /// Runs the command.
 pub fn run(context: &Context, args: PredictArgs) -> anyhow::Result<()> {
     let image = read_observation(&args.image)?;
-    let checkpoint = args
-        .checkpoint
-        .clone()
-        .unwrap_or_else(|| default_checkpoint(&context.data));
+    let checkpoint = checkpoint_path(context, args.checkpoint.as_deref());
     tch::set_num_threads(i32::from(context.threads));
     let precision = args.precision.resolve();
     let model = AffordanceModel::load(&checkpoint, precision)?;

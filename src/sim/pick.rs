@@ -86,6 +86,20 @@ pub struct PickOutcome {
     pub sim_seconds: f64,
 }
 
+impl PickOutcome {
+    /// A failed attempt in which nothing was held (the time is filled in by [`Workcell::pick`]).
+    pub fn failure(reason: PickReason, detail: String) -> Self {
+        Self {
+            success: false,
+            reason,
+            detail,
+            object: None,
+            placed: None,
+            sim_seconds: 0.0,
+        }
+    }
+}
+
 enum Stop {
     Collision(String),
     Ik(IkError),
@@ -108,14 +122,6 @@ impl Workcell {
     }
 
     fn pick_inner(&mut self, grasp: &WorldGrasp) -> PickOutcome {
-        let fail = |reason, detail: String| PickOutcome {
-            success: false,
-            reason,
-            detail,
-            object: None,
-            placed: None,
-            sim_seconds: 0.0,
-        };
         let ur5 = Ur5::new(to_isometry(&Pose::from_translation(super::ROBOT_BASE)));
         let grasp_tool0 = |tcp: Vector, closing: Vector| {
             // Tool z points down; fingers slide along tool y = the closing direction.
@@ -142,7 +148,9 @@ impl Workcell {
                 }
             }
             [Ok(a), Err(_)] | [Err(_), Ok(a)] => (a.0, a.1),
-            [Err(e), Err(_)] => return fail(PickReason::IkUnreachable, e.to_string()),
+            [Err(e), Err(_)] => {
+                return PickOutcome::failure(PickReason::IkUnreachable, e.to_string())
+            }
         };
 
         let heights_before: Vec<f32> = (0..self.objects.len())
@@ -263,14 +271,10 @@ impl Workcell {
                     )
                 };
                 Err(PickOutcome {
-                    success: false,
-                    reason,
-                    detail,
                     object: touching
                         .first()
                         .map(|&i| self.objects[i].model.name.clone()),
-                    placed: None,
-                    sim_seconds: 0.0,
+                    ..PickOutcome::failure(reason, detail)
                 })
             }
         }
@@ -282,14 +286,7 @@ impl Workcell {
             Stop::Ik(e) => (PickReason::IkUnreachable, e.to_string()),
         };
         self.recover();
-        PickOutcome {
-            success: false,
-            reason,
-            detail,
-            object: None,
-            placed: None,
-            sim_seconds: 0.0,
-        }
+        PickOutcome::failure(reason, detail)
     }
 
     /// After a failed attempt: open, back straight up, and return home, without collision stops.
