@@ -171,6 +171,7 @@ impl Workcell {
         self.trace("descended");
         self.gripper.close(&mut self.world);
         self.wait_for_fingers(1.0);
+        self.gripper.hold(&mut self.world);
         self.trace("closed");
         let carry = Guard { objects: false };
         if let Err(stop) = self.move_line(&ur5, grasp_tool0(above, closing), carry) {
@@ -196,11 +197,15 @@ impl Workcell {
         // A collision on the way to bin 2 stops the arm; the object is released wherever it is,
         // and `placed` reports where it came to rest.
         let _ = self.move_joints(PLACE_JOINTS, carry);
+        let at_place = self.object_pose(held).translation;
         self.gripper.open(&mut self.world);
         self.wait_for_fingers(0.6);
         self.hold_for(0.5);
         self.recover_home();
         self.settle(2.0);
+        // Where the object was when the hand reached the place pose tells a drop on the way
+        // (on the floor already) from a bounce out of bin 2.
+        tracing::debug!(object = %self.objects[held].model.name, ?at_place, location = ?self.locate(held), "placed");
         PickOutcome {
             success: true,
             reason: PickReason::Success,
@@ -510,4 +515,61 @@ pub(crate) fn to_isometry(pose: &Pose) -> Isometry3<f64> {
             q.w as f64, q.x as f64, q.y as f64, q.z as f64,
         )),
     )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::robot::gripper_geometry::PAD_HEIGHT;
+    use super::super::robot::groups;
+    use super::super::WorkcellConfig;
+    use super::*;
+    use rapier3d::prelude::{ColliderBuilder, RigidBodyBuilder};
+
+    /// How far a 50 g cube held in the closed jaw moves along the closing line, relative to
+    /// the hand, under a steady 5 N push along that line.
+    fn slide_under_push(hold: bool) -> f32 {
+        let assets = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/assets"));
+        let mut cell = Workcell::new(assets, &WorkcellConfig::default()).unwrap();
+        cell.set_robot_collisions(true);
+        // Only the push acts along the closing line; without gravity the cube waits for the jaw.
+        cell.world.gravity = Vector::ZERO;
+        let tool0 = cell.tool0_pose();
+        let centre =
+            tool0 * Pose::from_translation(Vector::new(0.0, 0.0, TCP_OFFSET - PAD_HEIGHT / 2.0));
+        let cube = cell
+            .world
+            .insert_body(RigidBodyBuilder::dynamic().pose(centre));
+        cell.world.insert_collider(
+            ColliderBuilder::cuboid(0.02, 0.02, 0.02)
+                .mass(0.05)
+                .friction(0.8)
+                .collision_groups(groups::object()),
+            Some(cube),
+        );
+        cell.gripper.close(&mut cell.world);
+        cell.wait_for_fingers(1.0);
+        if hold {
+            cell.gripper.hold(&mut cell.world);
+        }
+        let relative = |cell: &Workcell| {
+            cell.tool0_pose()
+                .inverse_transform_point(cell.world.bodies[cube].translation())
+        };
+        let before = relative(&cell);
+        let closing = tool0.rotation * Vector::Y;
+        cell.world.bodies[cube].add_force(closing * 5.0, true);
+        cell.hold_for(0.5);
+        (relative(&cell) - before).length()
+    }
+
+    #[test]
+    fn a_held_object_resists_a_push_along_the_closing_line() {
+        // Two force-capped motors pushing against each other let the jaw and the object
+        // slide together, towards a finger's end stop.
+        let free = slide_under_push(false);
+        assert!(free > 0.01, "without the hold the cube moved only {free} m");
+        // Held, the spring rate (grip force / squeeze, 2 kN/m) balances 5 N within 2.5 mm.
+        let held = slide_under_push(true);
+        assert!(held < 0.005, "held, the cube still moved {held} m");
+    }
 }
