@@ -43,6 +43,22 @@ impl Setup {
         all.extend_from_slice(args);
         graspmap(&all)
     }
+
+    /// The oracle emptying the default scene in at most `attempts` attempts, plus `extra`.
+    fn oracle_empty_bin(&self, attempts: u32, extra: &[&str]) -> std::process::Output {
+        let attempts = attempts.to_string();
+        let mut args = vec![
+            "eval",
+            "--task",
+            "empty_bin",
+            "--policy",
+            "oracle",
+            "--max-attempts",
+            &attempts,
+        ];
+        args.extend_from_slice(extra);
+        self.run(&args)
+    }
 }
 
 fn read_json(path: &Path) -> Value {
@@ -149,17 +165,7 @@ fn seeds_aggregate_and_the_random_policy_needs_no_checkpoint() {
 fn empty_bin_counts_moved_left_and_lost_every_attempt() {
     let setup = Setup::new();
     let json = setup.path("eval.json");
-    let out = setup.run(&[
-        "eval",
-        "--task",
-        "empty_bin",
-        "--policy",
-        "oracle",
-        "--max-attempts",
-        "2",
-        "--json",
-        json.to_str().unwrap(),
-    ]);
+    let out = setup.oracle_empty_bin(2, &["--json", json.to_str().unwrap()]);
     assert_ok(&out);
     let stdout = String::from_utf8_lossy(&out.stdout);
     let progress: Vec<&str> = stdout
@@ -267,17 +273,7 @@ fn bad_inputs_are_one_line_errors_with_exit_status_2() {
 fn record_writes_the_episode_beside_the_camera_view() {
     let setup = Setup::new();
     let gif = setup.path("episode.gif");
-    let out = setup.run(&[
-        "eval",
-        "--task",
-        "empty_bin",
-        "--policy",
-        "oracle",
-        "--max-attempts",
-        "1",
-        "--record",
-        gif.to_str().unwrap(),
-    ]);
+    let out = setup.oracle_empty_bin(1, &["--record", gif.to_str().unwrap()]);
     assert_ok(&out);
     let decoder = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
         std::fs::File::open(&gif).unwrap(),
