@@ -27,7 +27,9 @@ use crate::sim::{
     ObjectLocation, Workcell, WorkcellConfig, BIN1_CENTER, BIN_FLOOR_TOP, BIN_INNER_HALF,
     BIN_WALL_TOP,
 };
-use crate::workspace::{allowed_actions, CollisionCheck, GripperVolume, Tote};
+use crate::workspace::{
+    allowed_actions, centre_on_surface, CollisionCheck, GripperVolume, HeightMap, Tote,
+};
 
 /// Attempts per object in the train and test tasks (ref).
 pub const ATTEMPTS_PER_OBJECT: u32 = 3;
@@ -164,7 +166,7 @@ pub struct EvalResults {
 /// Who chooses grasps, with what it needs.
 enum Policy {
     /// The network, and how candidate grasps are checked for collisions.
-    Model(Box<AffordanceModel>, CollisionCheck),
+    Model(Box<AffordanceModel>, CollisionCheck, bool),
     Random,
     Oracle,
 }
@@ -208,6 +210,7 @@ pub fn run(context: &Context, args: EvalArgs) -> anyhow::Result<()> {
         PolicyChoice::Model => Policy::Model(
             Box::new(AffordanceModel::load(&checkpoint, precision)?),
             args.collision_check,
+            !args.no_centring,
         ),
         PolicyChoice::Random => Policy::Random,
         PolicyChoice::Oracle => Policy::Oracle,
@@ -287,6 +290,9 @@ pub fn run(context: &Context, args: EvalArgs) -> anyhow::Result<()> {
             "seeds": seeds,
             "suppression": suppression,
             "collision_check": (args.policy == PolicyChoice::Model).then_some(args.collision_check),
+            "centring": args.policy == PolicyChoice::Model
+                && args.collision_check == CollisionCheck::Full
+                && !args.no_centring,
             "max_attempts": args.max_attempts,
             "attempts_per_object": ATTEMPTS_PER_OBJECT,
             "objects": names,
@@ -501,7 +507,7 @@ fn decide(
     random_seed: u64,
 ) -> Decision {
     match policy {
-        Policy::Model(model, check) => {
+        Policy::Model(model, check, centring) => {
             let start = Instant::now();
             let rotated = rotated_observations(rgb);
             let mut maps = model.predict(&rotated);
@@ -516,7 +522,19 @@ fn decide(
                 ));
             }
             memory.apply(&mut maps);
-            let choice = maps.choose();
+            let mut choice = maps.choose();
+            if *check == CollisionCheck::Full && *centring {
+                let gripper = GripperVolume::from(&OracleConfig::default());
+                let heights = HeightMap::new(camera, frame);
+                choice.grasp = centre_on_surface(
+                    camera,
+                    frame,
+                    &heights,
+                    &pick_tote(),
+                    &gripper,
+                    choice.grasp,
+                );
+            }
             let network_seconds = start.elapsed().as_secs_f64();
             Decision {
                 grasp: Ok(choice.grasp),
