@@ -9,7 +9,7 @@ use std::collections::VecDeque;
 use image::{Rgb, RgbImage};
 
 use crate::augment::{rotate_image, rotate_point};
-use crate::dataset::{bin_angle, BINS};
+use crate::dataset::{angle_bin, bin_angle, BINS};
 use crate::grasp::PixelGrasp;
 
 /// The network's scores for one observation: [`BINS`] maps of `size` × `size`, each in the frame
@@ -57,6 +57,20 @@ impl AffordanceMaps {
         }
     }
 
+    /// The score of an original-image grasp: its angle's map at its centre carried into that
+    /// map's frame; 0 where the rotation leaves the map.
+    pub fn score_at(&self, grasp: PixelGrasp) -> f32 {
+        let bin = angle_bin(grasp.angle_deg);
+        let centre = [grasp.u as f32 + 0.5, grasp.v as f32 + 0.5];
+        let [x, y] = rotate_point(centre, -bin_angle(bin), self.size);
+        let inside = |c: f32| (0.0..self.size as f32).contains(&c);
+        if inside(x) && inside(y) {
+            self.get(bin, x as u32, y as u32)
+        } else {
+            0.0
+        }
+    }
+
     fn index(&self, bin: usize, u: u32, v: u32) -> usize {
         (bin * self.size as usize + v as usize) * self.size as usize + u as usize
     }
@@ -98,7 +112,8 @@ pub struct Choice {
     pub bin: usize,
     /// Pixel [column, row] in the rotated map.
     pub rotated: [u32; 2],
-    /// The grasp in the original image.
+    /// The grasp in the original image: the map pixel rotated back, or where `eval` moved it
+    /// before executing it (its centring); suppression lowers the maps around this one.
     pub grasp: PixelGrasp,
     /// Affordance at the chosen pixel (after any suppression).
     pub score: f32,
@@ -331,6 +346,27 @@ mod tests {
                 "{back:?} vs {label:?}"
             );
             assert_eq!(back.angle_deg, label.angle_deg);
+        }
+    }
+
+    #[test]
+    fn score_at_reads_a_grasp_from_its_angle_map() {
+        for bin in 0..BINS {
+            let grasp = PixelGrasp {
+                u: 50,
+                v: 70,
+                angle_deg: bin_angle(bin),
+            };
+            let [rx, ry] = rotate_point([50.5, 70.5], -bin_angle(bin), SIZE);
+            let mut maps = empty_maps();
+            let i = maps.index(bin, rx as u32, ry as u32);
+            maps.values[i] = 0.7;
+            assert_eq!(maps.score_at(grasp), 0.7, "bin {bin}");
+            let other = PixelGrasp {
+                angle_deg: bin_angle((bin + 1) % BINS),
+                ..grasp
+            };
+            assert_eq!(maps.score_at(other), 0.0, "bin {bin}");
         }
     }
 

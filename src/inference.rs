@@ -76,6 +76,12 @@ impl AffordanceModel {
         }
         let values = tch::no_grad(|| {
             let batch = Tensor::from_slice(&input).view([BINS as i64, 3, h as i64, w as i64]);
+            // oneDNN's fp32 convolutions run a fifth faster in channels_last (BENCHMARKS.md,
+            // "Training"); only for inference, since its backward pass is slower there.
+            let batch = match self.precision {
+                Precision::Fp32 => crate::unet::channels_last(&batch),
+                Precision::Bf16 => batch,
+            };
             let scores = self
                 .net
                 .forward_with(&batch, self.precision)

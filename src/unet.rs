@@ -122,7 +122,7 @@ impl Precision {
 }
 
 /// Channels-last layout: tch has no memory-format API, so permute, copy, permute back.
-fn channels_last(x: &Tensor) -> Tensor {
+pub fn channels_last(x: &Tensor) -> Tensor {
     x.permute([0, 2, 3, 1]).contiguous().permute([0, 3, 1, 2])
 }
 

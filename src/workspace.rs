@@ -269,28 +269,79 @@ pub const CENTRING_SPAN: f32 = 0.13;
 /// Step of the walk along the surface when centring (m): a quarter of a pixel on the floor.
 const CENTRING_STEP: f32 = 0.002;
 
-/// Moves a grasp, at its angle, to the middle of the surface the pads would close on, judged
-/// from the depth image alone.
+/// Moves a chosen grasp to the middle of the surface the pads would close on, judged from the
+/// depth image alone; `score` gives the network's (suppressed, collision-checked) score of a
+/// grasp, 0 where it is not allowed. `None` when the surface's middle cannot be grasped.
 ///
-/// The network places its peak on the right object and angle but often near a box's end: the
-/// 22 mm pads then catch a corner, and the squeeze spins a light box out of the jaw. From the
-/// grasp centre, the surface that rises above the TCP is followed both ways along the closing
-/// line (a run up to the open jaw) and across it (up to [`CENTRING_SPAN`]); where the whole run
-/// fits, the centre moves to its middle. The moved grasp is kept only
-/// if it still passes the `Full` collision check; otherwise the original is returned.
-pub fn centre_on_surface(
+/// The network places its peak on the right object but often near a box's end or corner: the
+/// 22 mm pads then catch a corner, and the squeeze spins a light box out of the jaw. So:
+/// 1. From the grasp centre, the surface that rises above the TCP is followed both ways along
+///    the closing line (a run up to the open jaw) and across it (up to [`CENTRING_SPAN`]); the
+///    centre moves to the middle of each run that fits ([`centred`]). If that grasp passes the
+///    `Full` collision check, it is the one. With nothing above the TCP at the centre, the
+///    grasp is kept as it is.
+/// 2. Otherwise the jaw, at this angle, does not fit across the middle (a box seen along its
+///    diagonal or long side): of the 8 angles at that middle, each centred again, the allowed
+///    one the network scores highest is taken.
+/// 3. If none is allowed, the grasp only fits at a corner or an end: `None`.
+pub fn refine_grasp(
     camera: &Camera,
     frame: &Frame,
     heights: &HeightMap,
     tote: &Tote,
     gripper: &GripperVolume,
     grasp: PixelGrasp,
-) -> PixelGrasp {
+    score: impl Fn(PixelGrasp) -> f32,
+) -> Option<PixelGrasp> {
+    let allowed = |g: PixelGrasp| {
+        grasp_allowed(
+            camera,
+            frame,
+            Some(heights),
+            tote,
+            gripper,
+            CollisionCheck::Full,
+            g,
+        )
+    };
+    let Some(middle) = centred(camera, frame, heights, tote, gripper, grasp) else {
+        return Some(grasp);
+    };
+    if allowed(middle) {
+        return Some(middle);
+    }
+    (0..BINS)
+        .map(|bin| PixelGrasp {
+            angle_deg: bin_angle(bin),
+            ..middle
+        })
+        .map(|g| centred(camera, frame, heights, tote, gripper, g).unwrap_or(g))
+        .filter(|&g| allowed(g))
+        .map(|g| (score(g), g))
+        .filter(|&(s, _)| s > 0.0)
+        .fold(None, |best: Option<(f32, PixelGrasp)>, (s, g)| match best {
+            Some((b, _)) if b >= s => best,
+            _ => Some((s, g)),
+        })
+        .map(|(_, g)| g)
+}
+
+/// The grasp, at its angle, moved to the middle of the surface above its TCP along and across
+/// the closing line, where each run fits (see [`refine_grasp`]); `None` when nothing rises above
+/// the TCP at its centre or the middle falls outside the image.
+pub fn centred(
+    camera: &Camera,
+    frame: &Frame,
+    heights: &HeightMap,
+    tote: &Tote,
+    gripper: &GripperVolume,
+    grasp: PixelGrasp,
+) -> Option<PixelGrasp> {
     let world = world_grasp(camera, frame, grasp);
     let grip_level = (world.tcp.z + LANDING_TOLERANCE).max(tote.floor_top + ON_OBJECT_HEIGHT);
     let solid = |p: Vector| heights.under(camera, p).is_some_and(|h| h > grip_level);
     if !solid(world.tcp) {
-        return grasp;
+        return None;
     }
     let along = Vector::new(world.closing.x, world.closing.y, 0.0).normalize_or_zero();
     let across = Vector::new(-along.y, along.x, 0.0);
@@ -308,32 +359,17 @@ pub fn centre_on_surface(
             _ => 0.0,
         };
     let shift = along * middle(along, gripper.opening) + across * middle(across, CENTRING_SPAN);
-    let surface = world.tcp + shift;
-    let Some([u, v, _]) = camera.project(Vector::new(surface.x, surface.y, grip_level)) else {
-        return grasp;
-    };
+    // Projected at the height of the surface seen at the grasp, so that an unmoved grasp maps
+    // back to its own pixel.
+    let target = world.tcp + shift;
+    let surface = Vector::new(target.x, target.y, heights.at(grasp.u, grasp.v));
+    let [u, v, _] = camera.project(surface)?;
     let size = frame.width as f32;
-    if !(0.0..size).contains(&u) || !(0.0..size).contains(&v) {
-        return grasp;
-    }
-    let centred = PixelGrasp {
+    ((0.0..size).contains(&u) && (0.0..size).contains(&v)).then_some(PixelGrasp {
         u: u as u32,
         v: v as u32,
         angle_deg: grasp.angle_deg,
-    };
-    if grasp_allowed(
-        camera,
-        frame,
-        Some(heights),
-        tote,
-        gripper,
-        CollisionCheck::Full,
-        centred,
-    ) {
-        centred
-    } else {
-        grasp
-    }
+    })
 }
 
 #[cfg(test)]
@@ -468,11 +504,13 @@ mod tests {
         assert!(allowed[..plane].iter().filter(|&&a| a).count() > plane / 4);
     }
 
-    fn centred(frame: &Frame, grasp: PixelGrasp) -> PixelGrasp {
+    /// The refined grasp, with a network that likes every allowed grasp equally.
+    fn refined(frame: &Frame, grasp: PixelGrasp) -> PixelGrasp {
         let camera = Camera::top_down();
         let heights = HeightMap::new(&camera, frame);
         let gripper = GripperVolume::from(&OracleConfig::default());
-        centre_on_surface(&camera, frame, &heights, &tote(), &gripper, grasp)
+        refine_grasp(&camera, frame, &heights, &tote(), &gripper, grasp, |_| 0.5)
+            .expect("graspable")
     }
 
     #[test]
@@ -482,7 +520,7 @@ mod tests {
         // end (5 px off across the closing line) and 2 px off along it.
         let frame = block_frame(&camera, Some([4, 5]));
         for (u, v, angle_deg) in [(64, 68, 0.0), (64, 60, 0.0), (66, 69, 0.0), (62, 60, 0.0)] {
-            let g = centred(&frame, PixelGrasp { u, v, angle_deg });
+            let g = refined(&frame, PixelGrasp { u, v, angle_deg });
             assert_eq!(g.angle_deg, angle_deg);
             assert!(
                 g.u.abs_diff(64) <= 1 && g.v.abs_diff(64) <= 1,
@@ -492,7 +530,7 @@ mod tests {
             );
         }
         // At 90° the jaw closes along the rows, so the columns are centred across it.
-        let g = centred(
+        let g = refined(
             &frame,
             PixelGrasp {
                 u: 61,
@@ -504,12 +542,68 @@ mod tests {
     }
 
     #[test]
+    fn a_grasp_across_a_box_diagonal_turns_to_the_box_sides() {
+        // A 5 cm tall box standing at 45° to the image axes (|du| + |dv| ≤ 5 px): across the
+        // image axes it is 11 px (about 92 mm) wide, wider than the jaw; across its sides about
+        // 65 mm. A grasp at 0° near its top corner fits only there, where the pads would catch
+        // the corner; refined, it closes across the sides at the middle.
+        let camera = Camera::top_down();
+        let mut frame = floor_frame(&camera, None);
+        let eye = camera.eye();
+        for v in 0..128u32 {
+            for u in 0..128u32 {
+                if u.abs_diff(64) + v.abs_diff(64) <= 5 {
+                    let far = camera.pixel_to_world(u, v, 1.0);
+                    frame.depth[(v * 128 + u) as usize] = (eye.z - 0.07) / (eye.z - far.z);
+                }
+            }
+        }
+        let heights = HeightMap::new(&camera, &frame);
+        let gripper = GripperVolume::from(&OracleConfig::default());
+        let corner = PixelGrasp {
+            u: 64,
+            v: 60,
+            angle_deg: 0.0,
+        };
+        // Of the angles that fit at the middle, the one the network likes best.
+        let likes_135 = |g: PixelGrasp| if g.angle_deg == 135.0 { 0.9 } else { 0.1 };
+        let g = refine_grasp(
+            &camera,
+            &frame,
+            &heights,
+            &tote(),
+            &gripper,
+            corner,
+            likes_135,
+        )
+        .expect("the box fits across its sides");
+        assert_eq!(g.angle_deg, 135.0);
+        assert!(g.u.abs_diff(64) <= 1 && g.v.abs_diff(64) <= 1, "{g:?}");
+        // Across the diagonals (0° and 90°) it never fits at the middle.
+        let g = refined(&frame, corner);
+        assert!(g.angle_deg != 0.0 && g.angle_deg != 90.0, "{g:?}");
+        assert!(g.u.abs_diff(64) <= 1 && g.v.abs_diff(64) <= 1, "{g:?}");
+        // If the network scores none of the fitting angles, the corner grasp is refused.
+        let heights = HeightMap::new(&camera, &frame);
+        let gripper = GripperVolume::from(&OracleConfig::default());
+        let corner = PixelGrasp {
+            u: 64,
+            v: 60,
+            angle_deg: 0.0,
+        };
+        let refused = refine_grasp(&camera, &frame, &heights, &tote(), &gripper, corner, |_| {
+            0.0
+        });
+        assert_eq!(refused, None);
+    }
+
+    #[test]
     fn a_long_part_keeps_the_spot_along_it_and_bare_floor_is_left_alone() {
         let camera = Camera::top_down();
         // A 3 × 41 px bar (about 2.5 × 35 cm): closing across it, the grasp is near one end and
         // stays there; only the small offset along the closing line is removed.
         let frame = block_frame(&camera, Some([1, 20]));
-        let g = centred(
+        let g = refined(
             &frame,
             PixelGrasp {
                 u: 65,
@@ -525,6 +619,6 @@ mod tests {
             v: 40,
             angle_deg: 45.0,
         };
-        assert_eq!(centred(&floor, at), at);
+        assert_eq!(refined(&floor, at), at);
     }
 }
