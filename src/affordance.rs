@@ -57,6 +57,21 @@ impl AffordanceMaps {
         }
     }
 
+    /// The action of an original-image grasp: its angle's bin, its centre in that bin's map and
+    /// the score there (0 where the rotation leaves the map).
+    pub fn choice_of(&self, grasp: PixelGrasp) -> Choice {
+        let bin = angle_bin(grasp.angle_deg);
+        let centre = [grasp.u as f32 + 0.5, grasp.v as f32 + 0.5];
+        let [x, y] = rotate_point(centre, -bin_angle(bin), self.size);
+        let clip = |c: f32| (c.floor().max(0.0) as u32).min(self.size - 1);
+        Choice {
+            bin,
+            rotated: [clip(x), clip(y)],
+            grasp,
+            score: self.score_at(grasp),
+        }
+    }
+
     /// The score of an original-image grasp: its angle's map at its centre carried into that
     /// map's frame; 0 where the rotation leaves the map.
     pub fn score_at(&self, grasp: PixelGrasp) -> f32 {
@@ -112,8 +127,8 @@ pub struct Choice {
     pub bin: usize,
     /// Pixel [column, row] in the rotated map.
     pub rotated: [u32; 2],
-    /// The grasp in the original image: the map pixel rotated back, or where `eval` moved it
-    /// before executing it (its centring); suppression lowers the maps around this one.
+    /// The grasp in the original image: the map pixel rotated back (or, when `eval`'s centring
+    /// moved it, the executed grasp, and `bin`, `rotated` and `score` are its own).
     pub grasp: PixelGrasp,
     /// Affordance at the chosen pixel (after any suppression).
     pub score: f32,
@@ -368,6 +383,18 @@ mod tests {
             };
             assert_eq!(maps.score_at(other), 0.0, "bin {bin}");
         }
+    }
+
+    #[test]
+    fn choice_of_a_grasp_is_the_action_that_unrotates_to_it() {
+        let mut maps = empty_maps();
+        let i = maps.index(6, 30, 90);
+        maps.values[i] = 0.8;
+        let peak = maps.choose();
+        let back = maps.choice_of(peak.grasp);
+        assert_eq!((back.bin, back.grasp), (peak.bin, peak.grasp));
+        assert!(back.rotated[0].abs_diff(30) <= 1 && back.rotated[1].abs_diff(90) <= 1);
+        assert_eq!(back.score, maps.get(6, back.rotated[0], back.rotated[1]));
     }
 
     #[test]

@@ -197,10 +197,11 @@ pub struct EvalArgs {
     /// (walls) or also land on a surface seen in the depth image (full); off = plain argmax.
     #[arg(long, value_enum, default_value_t = crate::workspace::CollisionCheck::Full)]
     pub collision_check: crate::workspace::CollisionCheck,
-    /// Model policy: execute the chosen grasp as the network placed it, without moving it to the
-    /// middle of the surface under it (centring needs `--collision-check full`).
+    /// Model policy: move the chosen grasp to the middle of the surface under it, turning it to
+    /// an angle that fits there if needed (needs `--collision-check full`). Off by default: it
+    /// moves more objects in empty_bin but picks fewer training objects (BENCHMARKS.md).
     #[arg(long)]
-    pub no_centring: bool,
+    pub centring: bool,
     /// empty_bin: most pick attempts per scene.
     #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
     pub max_attempts: u32,

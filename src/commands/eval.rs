@@ -210,7 +210,7 @@ pub fn run(context: &Context, args: EvalArgs) -> anyhow::Result<()> {
         PolicyChoice::Model => Policy::Model(
             Box::new(AffordanceModel::load(&checkpoint, precision)?),
             args.collision_check,
-            !args.no_centring,
+            args.centring,
         ),
         PolicyChoice::Random => Policy::Random,
         PolicyChoice::Oracle => Policy::Oracle,
@@ -292,7 +292,7 @@ pub fn run(context: &Context, args: EvalArgs) -> anyhow::Result<()> {
             "collision_check": (args.policy == PolicyChoice::Model).then_some(args.collision_check),
             "centring": args.policy == PolicyChoice::Model
                 && args.collision_check == CollisionCheck::Full
-                && !args.no_centring,
+                && args.centring,
             "max_attempts": args.max_attempts,
             "attempts_per_object": ATTEMPTS_PER_OBJECT,
             "objects": names,
@@ -537,7 +537,9 @@ fn decide(
                     choice.grasp,
                     |g| maps.score_at(g),
                 );
-                choice.grasp = refined.unwrap_or(choice.grasp);
+                if let Some(grasp) = refined.filter(|&g| g != choice.grasp) {
+                    choice = maps.choice_of(grasp);
+                }
             }
             let network_seconds = start.elapsed().as_secs_f64();
             Decision {
