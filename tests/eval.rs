@@ -134,6 +134,22 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
     let again = setup.path("again.json");
     assert_ok(&setup.run(&["eval", "--task", "train", "--json", again.to_str().unwrap()]));
     assert_eq!(decisions(&report), decisions(&read_json(&again)));
+    assert_eq!(report["config"]["centring"], false);
+
+    // Centring reports the executed grasp as its own action: angle, bin and map pixel agree.
+    let centred = setup.path("centred.json");
+    let args = ["eval", "--task", "train", "--centring", "--json"];
+    assert_ok(&setup.run(&[&args[..], &[centred.to_str().unwrap()]].concat()));
+    let centred = read_json(&centred);
+    assert_eq!(centred["config"]["centring"], true);
+    for a in centred["results"]["runs"][0]["attempts"]
+        .as_array()
+        .unwrap()
+    {
+        let angle = a["grasp"]["angle_deg"].as_f64().unwrap();
+        assert_eq!(a["choice"]["bin"].as_f64().unwrap() * 22.5, angle, "{a}");
+        assert_eq!(a["choice"]["grasp"], a["grasp"], "{a}");
+    }
 }
 
 #[test]
