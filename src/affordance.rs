@@ -60,9 +60,7 @@ impl AffordanceMaps {
     /// The action of an original-image grasp: its angle's bin, its centre in that bin's map and
     /// the score there (0 where the rotation leaves the map).
     pub fn choice_of(&self, grasp: PixelGrasp) -> Choice {
-        let bin = angle_bin(grasp.angle_deg);
-        let centre = [grasp.u as f32 + 0.5, grasp.v as f32 + 0.5];
-        let [x, y] = rotate_point(centre, -bin_angle(bin), self.size);
+        let (bin, [x, y]) = self.map_position(grasp);
         let clip = |c: f32| (c.floor().max(0.0) as u32).min(self.size - 1);
         Choice {
             bin,
@@ -75,15 +73,20 @@ impl AffordanceMaps {
     /// The score of an original-image grasp: its angle's map at its centre carried into that
     /// map's frame; 0 where the rotation leaves the map.
     pub fn score_at(&self, grasp: PixelGrasp) -> f32 {
-        let bin = angle_bin(grasp.angle_deg);
-        let centre = [grasp.u as f32 + 0.5, grasp.v as f32 + 0.5];
-        let [x, y] = rotate_point(centre, -bin_angle(bin), self.size);
+        let (bin, [x, y]) = self.map_position(grasp);
         let inside = |c: f32| (0.0..self.size as f32).contains(&c);
         if inside(x) && inside(y) {
             self.get(bin, x as u32, y as u32)
         } else {
             0.0
         }
+    }
+
+    /// The bin of a grasp's angle and its centre carried into that bin's map frame.
+    fn map_position(&self, grasp: PixelGrasp) -> (usize, [f32; 2]) {
+        let bin = angle_bin(grasp.angle_deg);
+        let centre = [grasp.u as f32 + 0.5, grasp.v as f32 + 0.5];
+        (bin, rotate_point(centre, -bin_angle(bin), self.size))
     }
 
     fn index(&self, bin: usize, u: u32, v: u32) -> usize {

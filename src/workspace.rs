@@ -269,107 +269,123 @@ pub const CENTRING_SPAN: f32 = 0.13;
 /// Step of the walk along the surface when centring (m): a quarter of a pixel on the floor.
 const CENTRING_STEP: f32 = 0.002;
 
-/// Moves a chosen grasp to the middle of the surface the pads would close on, judged from the
-/// depth image alone; `score` gives the network's (suppressed, collision-checked) score of a
-/// grasp, 0 where it is not allowed. `None` when the surface's middle cannot be grasped.
-///
-/// The network places its peak on the right object but often near a box's end or corner: the
-/// 22 mm pads then catch a corner, and the squeeze spins a light box out of the jaw. So:
-/// 1. From the grasp centre, the surface that rises above the TCP is followed both ways along
-///    the closing line (a run up to the open jaw) and across it (up to [`CENTRING_SPAN`]); the
-///    centre moves to the middle of each run that fits ([`centred`]). If that grasp passes the
-///    `Full` collision check, it is the one. With nothing above the TCP at the centre, the
-///    grasp is kept as it is.
-/// 2. Otherwise the jaw, at this angle, does not fit across the middle (a box seen along its
-///    diagonal or long side): of the 8 angles at that middle, each centred again, the allowed
-///    one the network scores highest is taken.
-/// 3. If none is allowed, the grasp only fits at a corner or an end: `None`.
-pub fn refine_grasp(
-    camera: &Camera,
-    frame: &Frame,
-    heights: &HeightMap,
-    tote: &Tote,
-    gripper: &GripperVolume,
-    grasp: PixelGrasp,
-    score: impl Fn(PixelGrasp) -> f32,
-) -> Option<PixelGrasp> {
-    let allowed = |g: PixelGrasp| {
-        grasp_allowed(
-            camera,
-            frame,
-            Some(heights),
-            tote,
-            gripper,
-            CollisionCheck::Full,
-            g,
-        )
-    };
-    let Some(middle) = centred(camera, frame, heights, tote, gripper, grasp) else {
-        return Some(grasp);
-    };
-    if allowed(middle) {
-        return Some(middle);
-    }
-    (0..BINS)
-        .map(|bin| PixelGrasp {
-            angle_deg: bin_angle(bin),
-            ..middle
-        })
-        .map(|g| centred(camera, frame, heights, tote, gripper, g).unwrap_or(g))
-        .filter(|&g| allowed(g))
-        .map(|g| (score(g), g))
-        .filter(|&(s, _)| s > 0.0)
-        .fold(None, |best: Option<(f32, PixelGrasp)>, (s, g)| match best {
-            Some((b, _)) if b >= s => best,
-            _ => Some((s, g)),
-        })
-        .map(|(_, g)| g)
+/// What the depth-based grasp checks look at: the camera, its frame and the heights it shows,
+/// the pick tote and the open gripper.
+#[derive(Clone, Copy)]
+pub struct GraspSite<'a> {
+    /// The top-down camera.
+    pub camera: &'a Camera,
+    /// Its frame.
+    pub frame: &'a Frame,
+    /// The frame's heights ([`HeightMap::new`]).
+    pub heights: &'a HeightMap,
+    /// The pick tote.
+    pub tote: &'a Tote,
+    /// The open gripper's volume.
+    pub gripper: &'a GripperVolume,
 }
 
-/// The grasp, at its angle, moved to the middle of the surface above its TCP along and across
-/// the closing line, where each run fits (see [`refine_grasp`]); `None` when nothing rises above
-/// the TCP at its centre or the middle falls outside the image.
-pub fn centred(
-    camera: &Camera,
-    frame: &Frame,
-    heights: &HeightMap,
-    tote: &Tote,
-    gripper: &GripperVolume,
-    grasp: PixelGrasp,
-) -> Option<PixelGrasp> {
-    let world = world_grasp(camera, frame, grasp);
-    let grip_level = (world.tcp.z + LANDING_TOLERANCE).max(tote.floor_top + ON_OBJECT_HEIGHT);
-    let solid = |p: Vector| heights.under(camera, p).is_some_and(|h| h > grip_level);
-    if !solid(world.tcp) {
-        return None;
+impl GraspSite<'_> {
+    /// Whether the grasp passes the `Full` collision check.
+    pub fn allows(&self, grasp: PixelGrasp) -> bool {
+        grasp_allowed(
+            self.camera,
+            self.frame,
+            Some(self.heights),
+            self.tote,
+            self.gripper,
+            CollisionCheck::Full,
+            grasp,
+        )
     }
-    let along = Vector::new(world.closing.x, world.closing.y, 0.0).normalize_or_zero();
-    let across = Vector::new(-along.y, along.x, 0.0);
-    // Distance to the surface's edge in `direction`, or None when it runs past `limit`.
-    let edge = |direction: Vector, limit: f32| {
-        let steps = (limit / CENTRING_STEP).ceil() as u32;
-        (1..=steps)
-            .map(|i| i as f32 * CENTRING_STEP)
-            .find(|&s| !solid(world.tcp + direction * s))
-    };
-    // The offset to the middle of the run through the centre, if the whole run is within `span`.
-    let middle =
-        |direction: Vector, span: f32| match (edge(-direction, span), edge(direction, span)) {
-            (Some(minus), Some(plus)) if minus + plus <= span => (plus - minus) / 2.0,
-            _ => 0.0,
+
+    /// Moves a chosen grasp to the middle of the surface the pads would close on, judged from the
+    /// depth image alone; `score` gives the network's (suppressed, collision-checked) score of a
+    /// grasp, 0 where it is not allowed. `None` when the surface's middle cannot be grasped.
+    ///
+    /// The network places its peak on the right object but often near a box's end or corner: the
+    /// 22 mm pads then catch a corner, and the squeeze spins a light box out of the jaw. So:
+    /// 1. From the grasp centre, the surface that rises above the TCP is followed both ways along
+    ///    the closing line (a run up to the open jaw) and across it (up to [`CENTRING_SPAN`]);
+    ///    the centre moves to the middle of each run that fits ([`GraspSite::centred`]). If
+    ///    that grasp passes the `Full` collision check, it is the one. With nothing above the
+    ///    TCP at the centre, the grasp is kept as it is.
+    /// 2. Otherwise the jaw, at this angle, does not fit across the middle (a box seen along its
+    ///    diagonal or long side): of the 8 angles at that middle, each centred again, the allowed
+    ///    one the network scores highest is taken.
+    /// 3. If none is allowed, the grasp only fits at a corner or an end: `None`.
+    pub fn refine(
+        &self,
+        grasp: PixelGrasp,
+        score: impl Fn(PixelGrasp) -> f32,
+    ) -> Option<PixelGrasp> {
+        let Some(middle) = self.centred(grasp) else {
+            return Some(grasp);
         };
-    let shift = along * middle(along, gripper.opening) + across * middle(across, CENTRING_SPAN);
-    // Projected at the height of the surface seen at the grasp, so that an unmoved grasp maps
-    // back to its own pixel.
-    let target = world.tcp + shift;
-    let surface = Vector::new(target.x, target.y, heights.at(grasp.u, grasp.v));
-    let [u, v, _] = camera.project(surface)?;
-    let size = frame.width as f32;
-    ((0.0..size).contains(&u) && (0.0..size).contains(&v)).then_some(PixelGrasp {
-        u: u as u32,
-        v: v as u32,
-        angle_deg: grasp.angle_deg,
-    })
+        if self.allows(middle) {
+            return Some(middle);
+        }
+        (0..BINS)
+            .map(|bin| PixelGrasp {
+                angle_deg: bin_angle(bin),
+                ..middle
+            })
+            .map(|g| self.centred(g).unwrap_or(g))
+            .filter(|&g| self.allows(g))
+            .map(|g| (score(g), g))
+            .filter(|&(s, _)| s > 0.0)
+            .fold(None, |best: Option<(f32, PixelGrasp)>, (s, g)| match best {
+                Some((b, _)) if b >= s => best,
+                _ => Some((s, g)),
+            })
+            .map(|(_, g)| g)
+    }
+
+    /// The grasp, at its angle, moved to the middle of the surface above its TCP along and across
+    /// the closing line, where each run fits (see [`GraspSite::refine`]); `None` when nothing rises above
+    /// the TCP at its centre or the middle falls outside the image.
+    pub fn centred(&self, grasp: PixelGrasp) -> Option<PixelGrasp> {
+        let Self {
+            camera,
+            frame,
+            heights,
+            tote,
+            gripper,
+        } = *self;
+        let world = world_grasp(camera, frame, grasp);
+        let grip_level = (world.tcp.z + LANDING_TOLERANCE).max(tote.floor_top + ON_OBJECT_HEIGHT);
+        let solid = |p: Vector| heights.under(camera, p).is_some_and(|h| h > grip_level);
+        if !solid(world.tcp) {
+            return None;
+        }
+        let along = Vector::new(world.closing.x, world.closing.y, 0.0).normalize_or_zero();
+        let across = Vector::new(-along.y, along.x, 0.0);
+        // Distance to the surface's edge in `direction`, or None when it runs past `limit`.
+        let edge = |direction: Vector, limit: f32| {
+            let steps = (limit / CENTRING_STEP).ceil() as u32;
+            (1..=steps)
+                .map(|i| i as f32 * CENTRING_STEP)
+                .find(|&s| !solid(world.tcp + direction * s))
+        };
+        // The offset to the middle of the run through the centre, if the whole run is within `span`.
+        let middle =
+            |direction: Vector, span: f32| match (edge(-direction, span), edge(direction, span)) {
+                (Some(minus), Some(plus)) if minus + plus <= span => (plus - minus) / 2.0,
+                _ => 0.0,
+            };
+        let shift = along * middle(along, gripper.opening) + across * middle(across, CENTRING_SPAN);
+        // Projected at the height of the surface seen at the grasp, so that an unmoved grasp maps
+        // back to its own pixel.
+        let target = world.tcp + shift;
+        let surface = Vector::new(target.x, target.y, heights.at(grasp.u, grasp.v));
+        let [u, v, _] = camera.project(surface)?;
+        let size = frame.width as f32;
+        ((0.0..size).contains(&u) && (0.0..size).contains(&v)).then_some(PixelGrasp {
+            u: u as u32,
+            v: v as u32,
+            angle_deg: grasp.angle_deg,
+        })
+    }
 }
 
 #[cfg(test)]
@@ -509,8 +525,15 @@ mod tests {
         let camera = Camera::top_down();
         let heights = HeightMap::new(&camera, frame);
         let gripper = GripperVolume::from(&OracleConfig::default());
-        refine_grasp(&camera, frame, &heights, &tote(), &gripper, grasp, |_| 0.5)
-            .expect("graspable")
+        let tote = tote();
+        let site = GraspSite {
+            camera: &camera,
+            frame,
+            heights: &heights,
+            tote: &tote,
+            gripper: &gripper,
+        };
+        site.refine(grasp, |_| 0.5).expect("graspable")
     }
 
     #[test]
@@ -567,16 +590,17 @@ mod tests {
         };
         // Of the angles that fit at the middle, the one the network likes best.
         let likes_135 = |g: PixelGrasp| if g.angle_deg == 135.0 { 0.9 } else { 0.1 };
-        let g = refine_grasp(
-            &camera,
-            &frame,
-            &heights,
-            &tote(),
-            &gripper,
-            corner,
-            likes_135,
-        )
-        .expect("the box fits across its sides");
+        let tote = tote();
+        let site = GraspSite {
+            camera: &camera,
+            frame: &frame,
+            heights: &heights,
+            tote: &tote,
+            gripper: &gripper,
+        };
+        let g = site
+            .refine(corner, likes_135)
+            .expect("the box fits across its sides");
         assert_eq!(g.angle_deg, 135.0);
         assert!(g.u.abs_diff(64) <= 1 && g.v.abs_diff(64) <= 1, "{g:?}");
         // Across the diagonals (0° and 90°) it never fits at the middle.
@@ -584,16 +608,7 @@ mod tests {
         assert!(g.angle_deg != 0.0 && g.angle_deg != 90.0, "{g:?}");
         assert!(g.u.abs_diff(64) <= 1 && g.v.abs_diff(64) <= 1, "{g:?}");
         // If the network scores none of the fitting angles, the corner grasp is refused.
-        let heights = HeightMap::new(&camera, &frame);
-        let gripper = GripperVolume::from(&OracleConfig::default());
-        let corner = PixelGrasp {
-            u: 64,
-            v: 60,
-            angle_deg: 0.0,
-        };
-        let refused = refine_grasp(&camera, &frame, &heights, &tote(), &gripper, corner, |_| {
-            0.0
-        });
+        let refused = site.refine(corner, |_| 0.0);
         assert_eq!(refused, None);
     }
 

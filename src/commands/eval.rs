@@ -28,7 +28,7 @@ use crate::sim::{
     BIN_WALL_TOP,
 };
 use crate::workspace::{
-    allowed_actions, refine_grasp, CollisionCheck, GripperVolume, HeightMap, Tote,
+    allowed_actions, CollisionCheck, GraspSite, GripperVolume, HeightMap, Tote,
 };
 
 /// Attempts per object in the train and test tasks (ref).
@@ -528,15 +528,14 @@ fn decide(
                 let heights = HeightMap::new(camera, frame);
                 // A grasp that fits only at a corner is still executed: refusing it and taking
                 // the next best did worse (BENCHMARKS.md, "Centring").
-                let refined = refine_grasp(
+                let site = GraspSite {
                     camera,
                     frame,
-                    &heights,
-                    &pick_tote(),
-                    &gripper,
-                    choice.grasp,
-                    |g| maps.score_at(g),
-                );
+                    heights: &heights,
+                    tote: &pick_tote(),
+                    gripper: &gripper,
+                };
+                let refined = site.refine(choice.grasp, |g| maps.score_at(g));
                 if let Some(grasp) = refined.filter(|&g| g != choice.grasp) {
                     choice = maps.choice_of(grasp);
                 }
