@@ -4,7 +4,10 @@ use std::f32::consts::FRAC_PI_2;
 use std::path::Path;
 
 use graspmap::camera::Camera;
-use graspmap::grasp::{closing_direction, image_angle, world_grasp, PixelGrasp};
+use graspmap::grasp::{
+    closing_direction, image_angle, world_grasp, PixelGrasp, WorldGrasp, DEPTH_BELOW_SURFACE,
+    MIN_TCP_HEIGHT,
+};
 use graspmap::objects::{ObjectLibrary, ObjectModel};
 use graspmap::oracle::{self, OracleConfig};
 use graspmap::sim::pick::{PickOutcome, PickReason};
@@ -172,9 +175,69 @@ fn grasp_across_a_side_wider_than_the_jaw_fails_but_across_the_narrow_side_succe
     let outcome = pick_pixel(&mut cell, u, v, image_angle(&camera, wide));
     assert_failure(&outcome, &cell);
 
+    // The 77 mm side leaves 4 mm a side, less than half a pixel: aim at the exact middle.
     let mut cell = brick(0.3);
-    let narrow = cell.object_pose(0).rotation * Vector::X;
-    let outcome = pick_pixel(&mut cell, u, v, image_angle(&camera, narrow));
+    let pose = cell.object_pose(0);
+    let narrow = pose.rotation * Vector::X;
+    let frame = cell.capture();
+    let tcp = world_grasp(
+        &camera,
+        &frame,
+        PixelGrasp {
+            u,
+            v,
+            angle_deg: 0.0,
+        },
+    )
+    .tcp;
+    let middle = Vector::new(pose.translation.x, pose.translation.y, tcp.z);
+    let outcome = cell.pick(&WorldGrasp {
+        tcp: middle,
+        closing: narrow,
+    });
+    assert_success(&outcome, &cell);
+}
+
+#[test]
+fn a_pad_coming_down_on_a_light_brick_stops_the_arm_and_leaves_the_brick_on_the_floor() {
+    // 7 mm off the brick's middle across its 77 mm side (4 mm to spare each side), a pad lands
+    // on its edge. Rapier's contact forces scale with the 28 g brick's mass, so the force limit
+    // never trips: before the depth guard the pad sank the brick through the tote floor.
+    let mut cell = placed(
+        "YcbFoamBrick",
+        Pose::from_translation(Vector::new(0.5, 0.0, BIN_FLOOR_TOP + 0.028)),
+    );
+    let rest = cell.object_pose(0).translation;
+    let closing = cell.object_pose(0).rotation * Vector::X;
+    let tcp = Vector::new(
+        rest.x,
+        rest.y,
+        MIN_TCP_HEIGHT.max(rest.z + 0.0275 - DEPTH_BELOW_SURFACE),
+    );
+    let outcome = cell.pick(&WorldGrasp {
+        tcp: tcp + closing * 0.007,
+        closing,
+    });
+    assert_eq!(outcome.reason, PickReason::Collision, "{outcome:?}");
+    assert!(
+        outcome
+            .detail
+            .contains("pressed YcbFoamBrick into the tote"),
+        "{outcome:?}"
+    );
+    cell.settle(1.0);
+    let after = cell.object_pose(0).translation;
+    assert!(
+        (after.z - rest.z).abs() < 0.002,
+        "the brick rests at {after:?}, was at {rest:?}"
+    );
+
+    // Centred, the same grasp fits and lifts it.
+    let mut cell = placed(
+        "YcbFoamBrick",
+        Pose::from_translation(Vector::new(0.5, 0.0, BIN_FLOOR_TOP + 0.028)),
+    );
+    let outcome = cell.pick(&WorldGrasp { tcp, closing });
     assert_success(&outcome, &cell);
 }
 

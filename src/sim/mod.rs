@@ -446,9 +446,15 @@ impl Workcell {
 
     /// True when a collider of the environment (ground, totes) touches `collider`.
     pub(crate) fn touches_environment(&self, collider: ColliderHandle, tolerance: f32) -> bool {
+        self.environment_penetration(collider) > tolerance
+    }
+
+    /// How deep `collider` is sunk into the environment (m); 0 when apart.
+    pub(crate) fn environment_penetration(&self, collider: ColliderHandle) -> f32 {
         self.environment
             .iter()
-            .any(|&env| penetration(&self.world, env, collider) > tolerance)
+            .map(|&env| penetration(&self.world, env, collider))
+            .fold(0.0, f32::max)
     }
 
     /// Largest normal force (N) between two colliders during the last step.

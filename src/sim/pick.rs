@@ -32,6 +32,9 @@ pub const LIFT_SUCCESS_HEIGHT: f32 = 0.2;
 pub const OBJECT_FORCE_LIMIT: f32 = 150.0;
 /// Penetration into the totes or ground that counts as a collision (m).
 pub const ENVIRONMENT_PENETRATION: f32 = 0.002;
+/// An object pushed this deep into the totes or ground during a guarded move stops the arm
+/// (m), counted from where it was when the move began.
+pub const OBJECT_PRESSED_DEPTH: f32 = 0.003;
 /// Below this opening the fingers count as fully closed (m).
 pub const CLOSED_OPENING: f32 = 0.004;
 /// Distance within which a pad counts as touching an object (m).
@@ -415,6 +418,13 @@ impl Workcell {
     ) -> Result<(), Option<Stop>> {
         let dt = 1.0 / PHYSICS_HZ as f64;
         let steps = (duration / dt).ceil() as u64;
+        // Objects may rest a little sunk (under a heavier one, against a wall); only what the
+        // move adds counts.
+        let sunk_before: Vec<f32> = self
+            .objects
+            .iter()
+            .map(|o| self.environment_penetration(o.collider))
+            .collect();
         for i in 1..=steps {
             let t = (i as f64 * dt).min(duration);
             let q = path(t).ok_or(None)?;
@@ -432,7 +442,7 @@ impl Workcell {
                 tracing::trace!(t = self.time(), opening = self.gripper.opening(&self.world), ?forces, object = ?self.objects.first().map(|o| self.world.bodies[o.body].translation()));
             }
             if let Some(guard) = guard {
-                if let Some(what) = self.collision(guard) {
+                if let Some(what) = self.collision(guard, &sunk_before) {
                     // The arm stops: it stays where it was before this step.
                     self.arm.joints = previous;
                     self.hold_arm();
@@ -445,7 +455,7 @@ impl Workcell {
     }
 
     /// The first guarded contact, described, if any.
-    fn collision(&self, guard: Guard) -> Option<String> {
+    fn collision(&self, guard: Guard, sunk_before: &[f32]) -> Option<String> {
         for &c in self
             .arm
             .colliders
@@ -462,6 +472,31 @@ impl Workcell {
             }
         }
         if guard.objects {
+            // Forces on an object scale with its mass in rapier's soft contacts, so a pad coming
+            // down on a 28 g brick never reaches the force limit: it sinks the brick into the
+            // floor instead. How deep an object is pushed into the tote stands in for the force.
+            let gripper_parts: Vec<rapier3d::prelude::ColliderHandle> = self
+                .gripper
+                .finger_colliders
+                .iter()
+                .flatten()
+                .copied()
+                .chain([self.gripper.palm_collider])
+                .collect();
+            for (object, &before) in self.objects.iter().zip(sunk_before) {
+                let sunk = self.environment_penetration(object.collider);
+                if sunk - before > OBJECT_PRESSED_DEPTH
+                    && gripper_parts
+                        .iter()
+                        .any(|&part| in_contact(&self.world, part, object.collider, TOUCH_GAP))
+                {
+                    tracing::debug!(object = %object.model.name, sunk, before, tool0 = ?self.tool0_pose().translation, "pressed into the tote");
+                    return Some(format!(
+                        "the gripper pressed {} into the tote",
+                        object.model.name
+                    ));
+                }
+            }
             let parts = self
                 .arm
                 .colliders
