@@ -108,11 +108,35 @@ impl AffordanceMaps {
                         best
                     }
                 });
+        self.choice_at(best, score)
+    }
+
+    /// The `count` best actions with a positive score, best first, ties in the order
+    /// [`AffordanceMaps::choose`] breaks them.
+    pub fn ranked(&self, count: usize) -> Vec<Choice> {
+        let by_score =
+            |a: &usize, b: &usize| self.values[*b].total_cmp(&self.values[*a]).then(a.cmp(b));
+        let mut order: Vec<usize> = (0..self.values.len())
+            .filter(|&i| self.values[i] > 0.0)
+            .collect();
+        if order.len() > count {
+            order.select_nth_unstable_by(count, by_score);
+            order.truncate(count);
+        }
+        order.sort_unstable_by(by_score);
+        order
+            .into_iter()
+            .map(|i| self.choice_at(i, self.values[i]))
+            .collect()
+    }
+
+    /// The action at a flat index into `values`.
+    fn choice_at(&self, index: usize, score: f32) -> Choice {
         let plane = (self.size * self.size) as usize;
-        let bin = best / plane;
+        let bin = index / plane;
         let (v, u) = (
-            (best % plane) as u32 / self.size,
-            (best % plane) as u32 % self.size,
+            (index % plane) as u32 / self.size,
+            (index % plane) as u32 % self.size,
         );
         Choice {
             bin,
@@ -495,6 +519,31 @@ mod tests {
         let mut maps = raw.clone();
         memory.apply(&mut maps);
         assert_eq!((maps.choose().grasp.u, maps.choose().grasp.v), (40, 60));
+    }
+
+    #[test]
+    fn ranked_lists_the_best_positive_actions_first_starting_with_the_argmax() {
+        let maps = bumpy_maps();
+        let ranked = maps.ranked(50);
+        assert_eq!(ranked.len(), 50);
+        assert_eq!(ranked[0], maps.choose());
+        assert!(ranked.windows(2).all(|w| w[0].score >= w[1].score));
+        for c in &ranked {
+            assert_eq!(maps.get(c.bin, c.rotated[0], c.rotated[1]), c.score);
+            assert_eq!(maps.choice_of(c.grasp).bin, c.bin);
+        }
+        // Only positive scores are actions worth trying.
+        let mut sparse = empty_maps();
+        for (bin, u, v, value) in [(2, 10, 20, 0.3), (5, 100, 7, 0.9), (7, 64, 64, 0.3)] {
+            let i = sparse.index(bin, u, v);
+            sparse.values[i] = value;
+        }
+        let order: Vec<(usize, [u32; 2])> = sparse
+            .ranked(10)
+            .iter()
+            .map(|c| (c.bin, c.rotated))
+            .collect();
+        assert_eq!(order, [(5, [100, 7]), (2, [10, 20]), (7, [64, 64])]);
     }
 
     #[test]

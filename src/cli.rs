@@ -197,6 +197,12 @@ pub struct EvalArgs {
     /// (walls) or also land on a surface seen in the depth image (full); off = plain argmax.
     #[arg(long, value_enum, default_value_t = crate::workspace::CollisionCheck::Full)]
     pub collision_check: crate::workspace::CollisionCheck,
+    /// Model policy: execute the first of the N best actions (after suppression and the
+    /// collision check) that passes the planner's depth test: the object fits the open jaw with
+    /// room to spare, both pads come down in free space and seen, and they close on flat faces
+    /// across the object, not on an edge; the argmax when none passes (0 = plain argmax).
+    #[arg(long, value_name = "N", default_value_t = 200)]
+    pub verify_top: usize,
     /// Model policy: move the chosen grasp to the middle of the surface under it, turning it to
     /// an angle that fits there if needed (needs `--collision-check full`). Off by default: it
     /// moves more objects in empty_bin but picks fewer training objects (BENCHMARKS.md).

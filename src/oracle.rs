@@ -163,6 +163,41 @@ pub fn assess(
     evaluate(&cloud, camera, frame, grasp, centroid, config).map_err(|r| r.describe().to_owned())
 }
 
+/// Checks grasps the way the planner does, from the depth image alone: no mask, so the grasp
+/// centre stands in for the object's centroid.
+pub struct DepthCheck<'a> {
+    camera: &'a Camera,
+    frame: &'a Frame,
+    cloud: Cloud,
+    config: OracleConfig,
+}
+
+impl<'a> DepthCheck<'a> {
+    /// Builds the point cloud of `frame` once for many checks.
+    pub fn new(camera: &'a Camera, frame: &'a Frame, config: OracleConfig) -> Self {
+        Self {
+            camera,
+            frame,
+            cloud: Cloud::new(camera, frame),
+            config,
+        }
+    }
+
+    /// The planner's verdict on one grasp: its quality terms, or why it would be rejected.
+    pub fn assess(&self, grasp: PixelGrasp) -> Result<OraclePlan, &'static str> {
+        let centre = world_grasp(self.camera, self.frame, grasp).tcp;
+        evaluate(
+            &self.cloud,
+            self.camera,
+            self.frame,
+            grasp,
+            centre,
+            &self.config,
+        )
+        .map_err(Reject::describe)
+    }
+}
+
 /// Why a candidate grasp was rejected.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Reject {

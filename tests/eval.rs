@@ -135,6 +135,7 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
     assert_ok(&setup.run(&["eval", "--task", "train", "--json", again.to_str().unwrap()]));
     assert_eq!(decisions(&report), decisions(&read_json(&again)));
     assert_eq!(report["config"]["centring"], false);
+    assert_eq!(report["config"]["verify_top"], 200);
 
     // Centring reports the executed grasp as its own action: angle, bin and map pixel agree.
     let centred = setup.path("centred.json");

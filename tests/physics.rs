@@ -9,7 +9,7 @@ use graspmap::grasp::{
     MIN_TCP_HEIGHT,
 };
 use graspmap::objects::{ObjectLibrary, ObjectModel};
-use graspmap::oracle::{self, OracleConfig};
+use graspmap::oracle::{self, DepthCheck, OracleConfig};
 use graspmap::sim::pick::{PickOutcome, PickReason};
 use graspmap::sim::{ObjectLocation, Workcell, BIN_FLOOR_TOP};
 use rapier3d::math::{Pose, Rotation, Vector};
@@ -239,6 +239,36 @@ fn a_pad_coming_down_on_a_light_brick_stops_the_arm_and_leaves_the_brick_on_the_
     );
     let outcome = cell.pick(&WorldGrasp { tcp, closing });
     assert_success(&outcome, &cell);
+}
+
+#[test]
+fn the_depth_test_passes_a_grasp_across_a_lying_can_and_vetoes_one_along_it_or_beside_it() {
+    let cell = lying_can(0.0);
+    let camera = Camera::top_down();
+    let frame = cell.capture();
+    let test = DepthCheck::new(&camera, &frame, OracleConfig::default());
+    let (u, v) = center_pixel(&cell);
+    let across = PixelGrasp {
+        u,
+        v,
+        angle_deg: 90.0,
+    };
+    let plan = test.assess(across).unwrap();
+    assert!((0.06..0.085).contains(&plan.width), "{plan:?}");
+    // 230 mm along the axis: the pads come down on the can.
+    assert!(test
+        .assess(PixelGrasp {
+            angle_deg: 0.0,
+            ..across
+        })
+        .is_err());
+    // 10 px (8.5 cm) beside the axis: a pad lands on the can, the other on bare floor.
+    assert!(test
+        .assess(PixelGrasp {
+            v: v + 10,
+            ..across
+        })
+        .is_err());
 }
 
 #[test]
