@@ -34,7 +34,7 @@ pub const OBJECT_FORCE_LIMIT: f32 = 150.0;
 pub const ENVIRONMENT_PENETRATION: f32 = 0.002;
 /// An object pushed this deep into the totes or ground during a guarded move stops the arm
 /// (m), counted from where it was when the move began.
-pub const OBJECT_PRESSED_DEPTH: f32 = 0.003;
+pub const OBJECT_PRESSED_DEPTH: f32 = 0.005;
 /// Below this opening the fingers count as fully closed (m).
 pub const CLOSED_OPENING: f32 = 0.004;
 /// Distance within which a pad counts as touching an object (m).
