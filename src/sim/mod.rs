@@ -99,14 +99,16 @@ pub struct Workcell {
     recorder: Option<Recorder>,
 }
 
-/// Renders an extra view every few steps while the arm moves (for `--record`).
-pub struct Recorder {
-    /// The view.
-    pub camera: crate::camera::Camera,
+/// Renders an extra view every few steps while the arm moves (for `--record`), on a thread of
+/// its own: the physics runs on one core, and rendering a frame in line with it took about as
+/// long as the 24 steps between frames.
+struct Recorder {
     /// Render every this many physics steps.
-    pub every: u64,
-    /// Frames so far.
-    pub frames: Vec<image::RgbImage>,
+    every: u64,
+    /// Snapshots of the scene, in step order, for the render thread.
+    scenes: std::sync::mpsc::Sender<Vec<Drawable>>,
+    /// The render thread; it returns the frames once `scenes` is closed.
+    renderer: std::thread::JoinHandle<Vec<image::RgbImage>>,
 }
 
 impl Workcell {
@@ -251,16 +253,30 @@ impl Workcell {
 
     /// Starts recording frames of `camera` every `every` steps.
     pub fn start_recording(&mut self, camera: crate::camera::Camera, every: u64) {
+        let (scenes, received) = std::sync::mpsc::channel::<Vec<Drawable>>();
+        let renderer = std::thread::spawn(move || {
+            received
+                .iter()
+                .map(|scene| crate::render::render(&camera, &scene).to_rgb_image())
+                .collect()
+        });
         self.recorder = Some(Recorder {
-            camera,
             every: every.max(1),
-            frames: Vec::new(),
+            scenes,
+            renderer,
         });
     }
 
     /// Stops recording and returns the frames.
     pub fn take_recording(&mut self) -> Vec<image::RgbImage> {
-        self.recorder.take().map(|r| r.frames).unwrap_or_default()
+        self.recorder
+            .take()
+            .map(|r| {
+                drop(r.scenes);
+                // A render thread that panicked leaves no frames; the attempt itself is unharmed.
+                r.renderer.join().unwrap_or_default()
+            })
+            .unwrap_or_default()
     }
 
     /// Advances physics by one step.
@@ -273,9 +289,9 @@ impl Workcell {
             .is_some_and(|r| self.steps % r.every == 0);
         if due {
             let scene = self.drawables();
-            if let Some(r) = self.recorder.as_mut() {
-                let frame = crate::render::render(&r.camera, &scene);
-                r.frames.push(frame.to_rgb_image());
+            if let Some(r) = &self.recorder {
+                // The render thread only stops when the recording is taken.
+                let _ = r.scenes.send(scene);
             }
         }
     }
