@@ -90,12 +90,20 @@ impl Labels {
         self.len() == 0
     }
 
-    /// Gives `object` a place in the file's order before it has labels: objects keep the order
-    /// they were reserved in, whoever labels first. Objects without labels are not written.
-    pub fn reserve(&mut self, object: &str) {
-        if !self.entries.iter().any(|(name, _)| name == object) {
-            self.entries.push((object.to_owned(), Vec::new()));
+    /// Puts `order`'s objects first, in that order (giving a place to those without labels yet),
+    /// and any others after them as they were. Objects without labels are not written, so a
+    /// file left by a killed run lists whichever object was labelled first; arranged like this,
+    /// the resumed file's order follows the split, whoever labels first.
+    pub fn arrange(&mut self, order: &[String]) {
+        let mut rest = std::mem::take(&mut self.entries);
+        for object in order {
+            let labels = match rest.iter().position(|(name, _)| name == object) {
+                Some(i) => rest.remove(i).1,
+                None => Vec::new(),
+            };
+            self.entries.push((object.clone(), labels));
         }
+        self.entries.extend(rest);
     }
 
     /// Appends a label for `object`; returns its 1-based index k.
@@ -446,6 +454,28 @@ impl LabelStore {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn arranged_labels_follow_the_split_whoever_was_labelled_first() {
+        // A run killed after the brick's first label, before the ball's.
+        let text = r#"{"YcbFoamBrick": [[50, 72, 135.0]], "YcbOther": [[1, 2, 0.0]]}"#;
+        let mut labels = Labels::parse(text, Path::new("labels.json")).unwrap();
+        labels.arrange(&["YcbTennisBall".to_owned(), "YcbFoamBrick".to_owned()]);
+        let ball = Label {
+            x: 83,
+            y: 75,
+            angle: 90.0,
+        };
+        labels.push("YcbTennisBall", ball);
+        let order: Vec<&str> = labels.iter().map(|(name, _)| name).collect();
+        assert_eq!(order, ["YcbTennisBall", "YcbFoamBrick", "YcbOther"]);
+        assert_eq!(labels.of("YcbFoamBrick").len(), 1);
+        let json = labels.to_json();
+        assert!(
+            json.find("YcbTennisBall") < json.find("YcbFoamBrick"),
+            "{json}"
+        );
+    }
 
     #[test]
     fn labels_round_trip_through_the_reference_format() {

@@ -197,8 +197,8 @@ pub fn run(context: &Context, args: LabelArgs) -> anyhow::Result<()> {
         (context.threads as usize).min(split.train.len()).max(1)
     };
     let mut progress = progress;
+    labels.arrange(&split.train);
     for object in &split.train {
-        labels.reserve(object);
         let (rounds, recorded) = progress.entry(object);
         progress.set_rounds(object, rounds, recorded);
     }
