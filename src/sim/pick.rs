@@ -419,12 +419,15 @@ impl Workcell {
         let dt = 1.0 / PHYSICS_HZ as f64;
         let steps = (duration / dt).ceil() as u64;
         // Objects may rest a little sunk (under a heavier one, against a wall); only what the
-        // move adds counts.
-        let sunk_before: Vec<f32> = self
-            .objects
-            .iter()
-            .map(|o| self.environment_penetration(o.collider))
-            .collect();
+        // move adds counts. Only moves that guard objects look at it.
+        let sunk_before: Vec<f32> = if guard.is_some_and(|g| g.objects) {
+            self.objects
+                .iter()
+                .map(|o| self.environment_penetration(o.collider))
+                .collect()
+        } else {
+            Vec::new()
+        };
         for i in 1..=steps {
             let t = (i as f64 * dt).min(duration);
             let q = path(t).ok_or(None)?;
@@ -475,19 +478,15 @@ impl Workcell {
             // Forces on an object scale with its mass in rapier's soft contacts, so a pad coming
             // down on a 28 g brick never reaches the force limit: it sinks the brick into the
             // floor instead. How deep an object is pushed into the tote stands in for the force.
-            let gripper_parts: Vec<rapier3d::prelude::ColliderHandle> = self
-                .gripper
-                .finger_colliders
-                .iter()
-                .flatten()
-                .copied()
-                .chain([self.gripper.palm_collider])
-                .collect();
             for (object, &before) in self.objects.iter().zip(sunk_before) {
                 let sunk = self.environment_penetration(object.collider);
                 if sunk - before > OBJECT_PRESSED_DEPTH
-                    && gripper_parts
+                    && self
+                        .gripper
+                        .finger_colliders
                         .iter()
+                        .flatten()
+                        .chain([&self.gripper.palm_collider])
                         .any(|&part| in_contact(&self.world, part, object.collider, TOUCH_GAP))
                 {
                     tracing::debug!(object = %object.model.name, sunk, before, tool0 = ?self.tool0_pose().translation, "pressed into the tote");
