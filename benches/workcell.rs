@@ -1,15 +1,17 @@
-//! Workcell timings: one top-down frame, and one complete single-object pick attempt (drop,
-//! settle, image, oracle plan, pick, place). Run: `cargo bench --bench workcell`.
+//! Workcell timings: a top-down frame, an oblique video frame, a frame with a dense mesh, and
+//! one complete single-object pick attempt (drop, settle, image, oracle plan, pick, place).
+//! Run: `cargo bench --bench workcell`.
 
-use std::path::Path;
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use graspmap::camera::Camera;
+use graspmap::assets::objects::{ObjectLibrary, SplitFile};
 use graspmap::grasp::world_grasp;
-use graspmap::objects::{ObjectLibrary, Split};
-use graspmap::oracle::{self, OracleConfig};
-use graspmap::render::render;
+use graspmap::policy::oracle::{self, OracleConfig};
 use graspmap::sim::Workcell;
+use graspmap::vision::camera::Camera;
+use graspmap::vision::render::{render, Drawable, Shape, TriMesh};
+use rapier3d::math::{Pose, Vector};
 
 fn median(mut samples: Vec<Duration>) -> Duration {
     samples.sort();
@@ -17,15 +19,14 @@ fn median(mut samples: Vec<Duration>) -> Duration {
 }
 
 fn main() {
-    let assets = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/assets"));
-    let library = ObjectLibrary::new(assets.join("objects"));
-    let split = Split::read(&assets.join("objects/split.json")).unwrap();
+    let library = ObjectLibrary::bundled();
+    let split = SplitFile::Bundled.read().unwrap();
     let names = split.all();
     let models = library.load_all(&names).unwrap();
     let camera = Camera::top_down();
 
     // A full bin: all 15 objects, the worst case for the renderer.
-    let mut cell = Workcell::new(assets, &Default::default()).unwrap();
+    let mut cell = Workcell::new(&Default::default()).unwrap();
     cell.drop_objects(&models, 2).unwrap();
     let scene = cell.drawables();
     let frames: Vec<Duration> = (0..200)
@@ -41,13 +42,48 @@ fn main() {
         median(frames).as_secs_f64() * 1e3
     );
 
+    let oblique = graspmap::sim::oblique_camera();
+    let video: Vec<Duration> = (0..20)
+        .map(|_| {
+            let start = Instant::now();
+            std::hint::black_box(render(&oblique, &scene));
+            start.elapsed()
+        })
+        .collect();
+    println!(
+        "render {}x{} oblique video frame, same scene: median {:.2} ms",
+        oblique.width,
+        oblique.height,
+        median(video).as_secs_f64() * 1e3
+    );
+    let sphere = Arc::new(uv_sphere(0.08, 100, 150));
+    let mut with_mesh = scene.clone();
+    with_mesh.push(Drawable {
+        shape: Shape::Mesh(sphere.clone()),
+        pose: Pose::from_translation(Vector::new(0.5, 0.0, 0.1)),
+        color: [0.5; 3],
+        id: 99,
+    });
+    let meshed: Vec<Duration> = (0..50)
+        .map(|_| {
+            let start = Instant::now();
+            std::hint::black_box(render(&camera, &with_mesh));
+            start.elapsed()
+        })
+        .collect();
+    println!(
+        "render 128x128, same scene + a {}-triangle mesh: median {:.2} ms",
+        sphere.triangles.len(),
+        median(meshed).as_secs_f64() * 1e3
+    );
+
     let mut attempts = Vec::new();
     let mut sim_seconds = 0.0;
     let mut successes = 0;
     for model in &models {
         for seed in 1..=3 {
             let start = Instant::now();
-            let mut cell = Workcell::new(assets, &Default::default()).unwrap();
+            let mut cell = Workcell::new(&Default::default()).unwrap();
             cell.drop_objects(std::slice::from_ref(model), seed)
                 .unwrap();
             let frame = cell.capture();
@@ -68,4 +104,29 @@ fn main() {
         attempts.iter().max().unwrap().as_secs_f64() * 1e3,
         sim_seconds / n as f64,
     );
+}
+
+/// A UV sphere of `stacks` × `slices` quads, two triangles each.
+fn uv_sphere(r: f32, stacks: u32, slices: u32) -> TriMesh {
+    let mut vertices = Vec::new();
+    for i in 0..=stacks {
+        let theta = std::f32::consts::PI * i as f32 / stacks as f32;
+        for j in 0..slices {
+            let phi = std::f32::consts::TAU * j as f32 / slices as f32;
+            let (sin_t, cos_t) = theta.sin_cos();
+            vertices.push(r * Vector::new(sin_t * phi.cos(), sin_t * phi.sin(), cos_t));
+        }
+    }
+    let mut triangles = Vec::new();
+    for i in 0..stacks {
+        for j in 0..slices {
+            let (a, b) = (i * slices + j, i * slices + (j + 1) % slices);
+            triangles.push([a, a + slices, b]);
+            triangles.push([b, a + slices, b + slices]);
+        }
+    }
+    TriMesh {
+        vertices,
+        triangles,
+    }
 }

@@ -14,7 +14,7 @@ from torch import nn
 
 
 class MiniUNet(nn.Module):
-    """SPEC section 7; the state_dict names are the ones graspmap's checkpoints use."""
+    """The reference MiniUNet (docs/learning.md); the state_dict names are the ones graspmap's checkpoints use."""
 
     def __init__(self):
         super().__init__()

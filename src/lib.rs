@@ -1,28 +1,27 @@
 //! graspmap: learn top-down grasps for a simulated UR5 from a few dozen labels (spatial action maps).
 //!
-//! Layers, one way only: the pure core (`camera`, `render`, `grasp`, `kinematics`, `oracle`,
-//! `augment`, `dataset` but for `load_dataset`, `affordance`, `workspace`, `metrics`) does no I/O; `unet`, `train` and
-//! `inference` are the model (tch, no rapier); `urdf` and `objects` read model files; `sim` is
-//! the rapier workcell (no tch); `commands` and `cli` orchestrate.
+//! The folders are the layers, and imports run one way, downwards:
+//!
+//! | layer | folders | may use |
+//! |---|---|---|
+//! | pure core | [`vision`], [`grasp`], [`data`], [`metrics`] | each other (no rapier world, no tch) |
+//! | model files | [`assets`] | the core |
+//! | simulator | [`sim`] | the core, `assets` (rapier, no tch) |
+//! | network | [`model`] | the core (tch, no rapier) |
+//! | policies | [`policy`] | the core, `model` (not `sim`) |
+//! | orchestration | `commands`, `cli` | everything |
+//!
+//! rapier's math types (glam `Vector`, `Pose`, …) are the crate's math types and appear in
+//! every layer. The conventions and numbers the code follows are in the repository's docs/.
 
-pub mod affordance;
-pub mod augment;
-pub mod camera;
+pub mod assets;
 pub mod cli;
-pub mod commands;
-pub mod dataset;
+pub(crate) mod commands;
+pub mod data;
 pub mod grasp;
-pub mod inference;
-pub mod kinematics;
-pub mod labels;
 pub mod metrics;
-pub mod objects;
-pub mod oracle;
-pub mod output;
-pub mod raycast;
-pub mod render;
+pub mod model;
+pub(crate) mod named;
+pub mod policy;
 pub mod sim;
-pub mod train;
-pub mod unet;
-pub mod urdf;
-pub mod workspace;
+pub mod vision;

@@ -122,9 +122,53 @@ pub fn median(values: &[f64]) -> f64 {
     }
 }
 
+/// How often each failure reason occurred: the one tally behind every report's failure column.
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
+#[serde(transparent)]
+pub struct FailureTally(std::collections::BTreeMap<String, usize>);
+
+impl FailureTally {
+    /// Counts one failure.
+    pub fn add(&mut self, reason: &str) {
+        *self.0.entry(reason.to_owned()).or_default() += 1;
+    }
+
+    /// The tally of the given reasons.
+    pub fn of<'a>(reasons: impl IntoIterator<Item = &'a str>) -> Self {
+        let mut tally = Self::default();
+        for reason in reasons {
+            tally.add(reason);
+        }
+        tally
+    }
+
+    /// "collision 2, slipped 1", or "-" when nothing failed.
+    pub fn describe(&self) -> String {
+        if self.0.is_empty() {
+            return "-".to_owned();
+        }
+        self.0
+            .iter()
+            .map(|(reason, n)| format!("{reason} {n}"))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn failure_tallies_count_by_reason_in_name_order() {
+        let tally = FailureTally::of(["slipped", "collision", "slipped"]);
+        assert_eq!(tally.describe(), "collision 1, slipped 2");
+        assert_eq!(FailureTally::default().describe(), "-");
+        assert_eq!(
+            serde_json::to_string(&tally).unwrap(),
+            r#"{"collision":1,"slipped":2}"#
+        );
+    }
 
     #[test]
     fn wilson_matches_published_values() {

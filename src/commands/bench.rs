@@ -1,17 +1,73 @@
 //! `graspmap bench train`: training-step throughput and 8-rotation inference latency, side by side with the same network in Python PyTorch.
 
-use std::path::PathBuf;
-use std::process::Command;
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
 use std::time::Instant;
 
 use anyhow::{bail, Context as _};
 use tch::{nn, Device, Kind, Tensor};
 
+use super::report::write_report;
 use super::Context;
-use crate::cli::BenchTrainArgs;
-use crate::output::write_report;
-use crate::train::{loss, Adam};
-use crate::unet::{MiniUNet, Precision};
+use crate::model::train::{loss, Adam};
+use crate::model::unet::{MiniUNet, Precision};
+
+/// The Python peer, compiled in so that an installed binary can run it from anywhere.
+const PEER_SCRIPT: &str = include_str!("../../scripts/bench_peer.py");
+/// Where the peer's Python lives when `--python` is not given, relative to the current
+/// directory: what scripts/setup-bench-peer.sh installs in a checkout.
+const PEER_PYTHON: &str = ".venv-bench/bin/python";
+/// The installer of [`PEER_PYTHON`], relative to a checkout.
+const PEER_SETUP: &str = "scripts/setup-bench-peer.sh";
+
+/// What `graspmap bench train` measures.
+#[derive(Debug, Clone)]
+pub struct BenchConfig {
+    /// Timed steps per block and side (after the warm-up).
+    pub steps: u32,
+    /// Blocks per side, alternating Rust and Python.
+    pub rounds: u32,
+    /// Precision of both sides.
+    pub precision: Precision,
+    /// The peer's Python; `None` times the Rust side only.
+    pub peer: Option<PeerPython>,
+}
+
+/// Which Python runs the peer.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum PeerPython {
+    /// `.venv-bench/bin/python` under the current directory, installed on first use.
+    Checkout,
+    /// A Python with torch 2.13 that the user named.
+    Given(PathBuf),
+}
+
+impl PeerPython {
+    /// The interpreter to run, installing the checkout's environment when it is missing.
+    fn resolve(&self) -> anyhow::Result<PathBuf> {
+        match self {
+            PeerPython::Given(path) => Ok(path.clone()),
+            PeerPython::Checkout => {
+                if Path::new(PEER_SETUP).is_file() {
+                    let status = Command::new(PEER_SETUP)
+                        .status()
+                        .with_context(|| format!("running {PEER_SETUP}"))?;
+                    if !status.success() {
+                        bail!("{PEER_SETUP} failed; rerun it, or pass --no-peer");
+                    }
+                } else if !Path::new(PEER_PYTHON).is_file() {
+                    bail!(
+                        "no Python peer: {PEER_PYTHON} is missing here and {PEER_SETUP} is not \
+                         in this directory; run bench from a graspmap checkout, pass --python \
+                         PATH (a python with torch 2.13), or pass --no-peer"
+                    );
+                }
+                Ok(PathBuf::from(PEER_PYTHON))
+            }
+        }
+    }
+}
 
 /// Warm-up steps before timing, as the peer does.
 const WARMUP: usize = 3;
@@ -65,13 +121,9 @@ fn timed(steps: usize, mut step: impl FnMut()) -> Vec<f64> {
 }
 
 /// Runs the command.
-pub fn run(context: &Context, args: BenchTrainArgs) -> anyhow::Result<()> {
-    let precision = args.precision.resolve();
-    let precision_name = match precision {
-        Precision::Fp32 => "fp32",
-        Precision::Bf16 => "bf16",
-    };
-    tch::set_num_threads(context.threads as i32);
+pub fn run(context: &Context, args: BenchConfig) -> anyhow::Result<()> {
+    let precision = args.precision;
+    crate::model::use_threads(context.threads);
     tch::manual_seed(0);
     let vs = nn::VarStore::new(Device::Cpu);
     let net = MiniUNet::new(&vs.root());
@@ -79,17 +131,8 @@ pub fn run(context: &Context, args: BenchTrainArgs) -> anyhow::Result<()> {
     let x = Tensor::rand([8, 3, 128, 128], (Kind::Float, Device::Cpu));
     let target = Tensor::zeros([8, 1, 128, 128], (Kind::Float, Device::Cpu));
     let _ = target.narrow(2, 64, 1).narrow(3, 64, 1).fill_(1.0);
+    let python = args.peer.as_ref().map(PeerPython::resolve).transpose()?;
 
-    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
-    let python = root.join(".venv-bench/bin/python");
-    if !args.no_peer {
-        let status = Command::new(root.join("scripts/setup-bench-peer.sh"))
-            .status()
-            .context("running scripts/setup-bench-peer.sh")?;
-        if !status.success() {
-            bail!("scripts/setup-bench-peer.sh failed; rerun it, or pass --no-peer");
-        }
-    }
     let (mut rust_train, mut rust_infer) = (Vec::new(), Vec::new());
     let (mut py_train, mut py_infer) = (Vec::new(), Vec::new());
     // Alternate blocks so that both sides see the same machine state over time.
@@ -107,41 +150,13 @@ pub fn run(context: &Context, args: BenchTrainArgs) -> anyhow::Result<()> {
                 let _ = net.forward_with(&x, precision).sigmoid();
             })
         }));
-        if args.no_peer {
-            continue;
-        }
+        let Some(python) = &python else { continue };
         if !context.quiet {
             eprintln!("round {}/{}: python", round + 1, args.rounds);
         }
-        let out = Command::new(&python)
-            .arg(root.join("scripts/bench_peer.py"))
-            .args(["--threads", &context.threads.to_string()])
-            .args(["--precision", precision_name])
-            .args(["--warmup", &WARMUP.to_string()])
-            .args(["--steps", &args.steps.to_string()])
-            .output()
-            .with_context(|| format!("running {}", python.display()))?;
-        if !out.status.success() {
-            bail!(
-                "the Python peer failed: {}",
-                String::from_utf8_lossy(&out.stderr)
-                    .lines()
-                    .last()
-                    .unwrap_or("")
-            );
-        }
-        let report: serde_json::Value =
-            serde_json::from_slice(&out.stdout).context("the Python peer printed no JSON")?;
-        let list = |key: &str| -> anyhow::Result<Vec<f64>> {
-            report[key]
-                .as_array()
-                .with_context(|| format!("the peer's JSON has no {key}"))?
-                .iter()
-                .map(|v| v.as_f64().context("a non-number timing"))
-                .collect()
-        };
-        py_train.extend(list("train_step_s")?);
-        py_infer.extend(list("infer_s")?);
+        let (train, infer) = run_peer(python, context.threads, &args)?;
+        py_train.extend(train);
+        py_infer.extend(infer);
     }
     let rust = side(&mut rust_train, &mut rust_infer);
     let python = (!py_train.is_empty()).then(|| side(&mut py_train, &mut py_infer));
@@ -157,9 +172,74 @@ pub fn run(context: &Context, args: BenchTrainArgs) -> anyhow::Result<()> {
         rust,
         python,
     };
+    print_results(context, &results);
+    if let Some(json) = &context.json {
+        let resolved = serde_json::json!({
+            "global": context,
+            "steps": args.steps,
+            "rounds": args.rounds,
+            "warmup": WARMUP,
+            "peer": args.peer.is_some(),
+        });
+        write_report(json, "bench", 0, &resolved, &results)?;
+    }
+    Ok(())
+}
+
+/// One block of the Python peer: its training-step and inference timings in seconds.
+fn run_peer(
+    python: &Path,
+    threads: u16,
+    args: &BenchConfig,
+) -> anyhow::Result<(Vec<f64>, Vec<f64>)> {
+    let precision_name = args.precision.name();
+    let mut child = Command::new(python)
+        .arg("-")
+        .args(["--threads", &threads.to_string()])
+        .args(["--precision", precision_name])
+        .args(["--warmup", &WARMUP.to_string()])
+        .args(["--steps", &args.steps.to_string()])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .with_context(|| format!("running {}", python.display()))?;
+    if let Some(mut stdin) = child.stdin.take() {
+        stdin
+            .write_all(PEER_SCRIPT.as_bytes())
+            .with_context(|| format!("sending the peer script to {}", python.display()))?;
+    }
+    let out = child
+        .wait_with_output()
+        .with_context(|| format!("running {}", python.display()))?;
+    if !out.status.success() {
+        bail!(
+            "the Python peer failed: {}",
+            String::from_utf8_lossy(&out.stderr)
+                .lines()
+                .last()
+                .unwrap_or("")
+        );
+    }
+    let report: serde_json::Value =
+        serde_json::from_slice(&out.stdout).context("the Python peer printed no JSON")?;
+    let list = |key: &str| -> anyhow::Result<Vec<f64>> {
+        report[key]
+            .as_array()
+            .with_context(|| format!("the peer's JSON has no {key}"))?
+            .iter()
+            .map(|v| v.as_f64().context("a non-number timing"))
+            .collect()
+    };
+    Ok((list("train_step_s")?, list("infer_s")?))
+}
+
+fn print_results(context: &Context, results: &BenchResults) {
     context.say(&format!(
-        "MiniUNet, batch 8, 128×128, {precision_name}, {} threads, median of {} steps",
-        context.threads, results.rust.steps
+        "MiniUNet, batch 8, 128×128, {}, {} threads, median of {} steps",
+        results.precision.name(),
+        results.threads,
+        results.rust.steps
     ));
     context.say(&format!(
         "{:<8} {:>14} {:>12} {:>22}",
@@ -181,15 +261,4 @@ pub fn run(context: &Context, args: BenchTrainArgs) -> anyhow::Result<()> {
             "rust/python: training throughput {t:.2}×, inference speed {i:.2}×"
         ));
     }
-    if let Some(json) = &context.json {
-        let resolved = serde_json::json!({
-            "global": context,
-            "steps": args.steps,
-            "rounds": args.rounds,
-            "warmup": WARMUP,
-            "peer": !args.no_peer,
-        });
-        write_report(json, "bench", 0, &resolved, &results)?;
-    }
-    Ok(())
 }

@@ -1,21 +1,48 @@
 //! `graspmap grasp`: one simulated pick attempt on one dropped object, from a given, oracle or random grasp.
 
+use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::Context as _;
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
-use rapier3d::math::Vector;
 
+use super::report::write_report;
+use super::video::save_gif_atomic;
 use super::Context;
-use crate::affordance::draw_grasp;
-use crate::camera::Camera;
-use crate::cli::{parse_pixel, GraspArgs};
-use crate::grasp::{normalize_angle, world_grasp, PixelGrasp};
-use crate::oracle::{self, OracleConfig};
-use crate::output::{save_gif_atomic, save_image_atomic, write_report};
+use crate::data::atomic::save_image_atomic;
+use crate::grasp::draw::draw_grasp;
+use crate::grasp::{world_grasp, PixelGrasp};
+use crate::policy::baselines::random_grasp;
+use crate::policy::oracle::{self, OracleConfig};
 use crate::sim::pick::{PickOutcome, PickReason};
-use crate::sim::{Workcell, WorkcellConfig, BIN1_CENTER, BIN_FLOOR_TOP, BIN_INNER_HALF};
+use crate::sim::{Workcell, WorkcellConfig};
+
+/// One `graspmap grasp` attempt, resolved by the CLI.
+#[derive(Debug, Clone)]
+pub struct GraspConfig {
+    /// Object to drop into bin 1.
+    pub object: String,
+    /// Seed of the drop pose (and of the random grasp).
+    pub seed: u64,
+    /// Where the grasp comes from.
+    pub choice: GraspChoice,
+    /// The workcell (grip force).
+    pub workcell: WorkcellConfig,
+    /// Where to write the attempt's animated GIF.
+    pub record: Option<PathBuf>,
+    /// Where to save the camera image with the grasp drawn.
+    pub image: Option<PathBuf>,
+}
+
+/// Who picks the grasp.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum GraspChoice {
+    /// The user's pixel and angle.
+    Given(PixelGrasp),
+    /// The planner, from mask and depth.
+    Oracle,
+    /// A random point of bin 1's floor.
+    Random,
+}
 
 /// How the grasp was chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -55,55 +82,32 @@ pub struct GraspResults {
 }
 
 /// Runs the command.
-pub fn run(context: &Context, args: GraspArgs) -> anyhow::Result<()> {
-    let given = match (&args.pixel, args.angle) {
-        (Some(pixel), Some(angle)) => {
-            if !angle.is_finite() {
-                anyhow::bail!("--angle {angle} must be a finite number of degrees");
-            }
-            let (u, v) = parse_pixel(pixel)?;
-            Some(PixelGrasp {
-                u,
-                v,
-                angle_deg: normalize_angle(angle),
-            })
-        }
-        _ => None,
-    };
-    if !(args.grip_force > 0.0 && args.grip_force.is_finite()) {
-        anyhow::bail!(
-            "--grip-force {} must be a positive number of newtons",
-            args.grip_force
-        );
-    }
+pub fn run(context: &Context, args: GraspConfig) -> anyhow::Result<()> {
     let start = Instant::now();
-    let model = context.library().load(&args.object)?;
-    let config = WorkcellConfig {
-        grip_force: args.grip_force,
-        ..WorkcellConfig::default()
-    };
-    let mut cell = Workcell::new(context.assets(), &config)?;
+    let model = context.objects.load(&args.object)?;
+    let config = args.workcell.clone();
+    let mut cell = Workcell::new(&config)?;
     cell.drop_objects(std::slice::from_ref(&model), args.seed)?;
     let render_start = Instant::now();
     let frame = cell.capture();
     let render_seconds = render_start.elapsed().as_secs_f64();
-    let camera = Camera::top_down();
+    let camera = *cell.camera();
 
-    let (source, choice) = if let Some(g) = given {
-        (GraspSource::Given, Ok(g))
-    } else if args.oracle {
-        let plan = oracle::plan(
-            &camera,
-            &frame,
-            cell.objects()[0].id,
-            &OracleConfig::default(),
-        );
-        (
-            GraspSource::Oracle,
-            plan.map(|p| p.grasp).map_err(|e| e.to_string()),
-        )
-    } else {
-        (GraspSource::Random, Ok(random_grasp(&camera, args.seed)))
+    let (source, choice) = match args.choice {
+        GraspChoice::Given(g) => (GraspSource::Given, Ok(g)),
+        GraspChoice::Oracle => {
+            let plan = oracle::plan(
+                &camera,
+                &frame,
+                cell.objects()[0].id,
+                &OracleConfig::default(),
+            );
+            (
+                GraspSource::Oracle,
+                plan.map(|p| p.grasp).map_err(|e| e.to_string()),
+            )
+        }
+        GraspChoice::Random => (GraspSource::Random, Ok(random_grasp(&camera, args.seed))),
     };
     if let Some(path) = &args.image {
         let mut image = frame.to_rgb_image();
@@ -114,7 +118,7 @@ pub fn run(context: &Context, args: GraspArgs) -> anyhow::Result<()> {
             .with_context(|| format!("writing --image {}", path.display()))?;
     }
     if args.record.is_some() {
-        cell.start_recording(record_camera(), RECORD_EVERY_STEPS);
+        cell.start_recording(RECORD_EVERY_STEPS);
     }
     let outcome = match &choice {
         Ok(g) => cell.pick(&world_grasp(&camera, &frame, *g)),
@@ -165,42 +169,6 @@ fn result_line(r: &GraspResults, seed: u64) -> String {
         r.detail,
         r.sim_seconds,
         r.wall_seconds
-    )
-}
-
-/// A uniformly random point of bin 1's floor, seen through the camera, and a uniform angle.
-pub fn random_grasp(camera: &Camera, seed: u64) -> PixelGrasp {
-    // A separate stream from the drop, so the same seed does not correlate the two.
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    rng.set_stream(1);
-    loop {
-        let point = Vector::new(
-            BIN1_CENTER.x + rng.random_range(-BIN_INNER_HALF[0]..=BIN_INNER_HALF[0]),
-            BIN1_CENTER.y + rng.random_range(-BIN_INNER_HALF[1]..=BIN_INNER_HALF[1]),
-            BIN_FLOOR_TOP,
-        );
-        let angle_deg = normalize_angle(rng.random_range(0.0..180.0));
-        if let Some([u, v, _]) = camera.project(point) {
-            if (0.0..128.0).contains(&u) && (0.0..128.0).contains(&v) {
-                return PixelGrasp {
-                    u: u as u32,
-                    v: v as u32,
-                    angle_deg,
-                };
-            }
-        }
-    }
-}
-
-/// The oblique view of the whole workcell used by `--record`.
-pub fn record_camera() -> Camera {
-    Camera::look_at(
-        Vector::new(1.35, -1.25, 1.25),
-        Vector::new(0.0, 0.0, 0.25),
-        Vector::Z,
-        45.0,
-        320,
-        240,
     )
 }
 

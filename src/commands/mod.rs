@@ -5,30 +5,24 @@ pub mod eval;
 pub mod grasp;
 pub mod label;
 pub mod predict;
+pub mod report;
 pub mod scene;
 pub mod train;
+pub mod video;
 
 use std::path::{Path, PathBuf};
 
-use crate::cli::GlobalArgs;
-use crate::objects::{ObjectLibrary, Split};
+use crate::assets::objects::{ObjectLibrary, Split, SplitFile};
 
-/// The bundled assets directory (robot and object models).
-pub fn bundled_assets() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("assets")
-}
-
-/// Settings shared by every command, resolved once from the global flags.
-#[derive(Debug, Clone, serde::Serialize)]
+/// Settings shared by every command, resolved once by the CLI from the global flags.
+#[derive(Debug, Clone)]
 pub struct Context {
     /// Data directory.
     pub data: PathBuf,
-    /// Robot and gripper assets.
-    pub assets: PathBuf,
-    /// Object models directory.
-    pub objects_dir: PathBuf,
-    /// Split file.
-    pub split_path: PathBuf,
+    /// Object models.
+    pub objects: ObjectLibrary,
+    /// The train/test split.
+    pub split: SplitFile,
     /// Worker threads.
     pub threads: u16,
     /// Where to write JSON results.
@@ -37,47 +31,30 @@ pub struct Context {
     pub quiet: bool,
 }
 
+/// How the context appears as `"global"` in every report: the same keys as ever, with the
+/// bundled models named `bundled:…` since they have no path on disk.
+impl serde::Serialize for Context {
+    fn serialize<S: serde::Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let mut global = serializer.serialize_struct("Context", 7)?;
+        global.serialize_field("data", &self.data)?;
+        global.serialize_field(
+            "assets",
+            &format!("{}assets", crate::assets::BUNDLED_PREFIX),
+        )?;
+        global.serialize_field("objects_dir", &self.objects.location())?;
+        global.serialize_field("split_path", &self.split.location())?;
+        global.serialize_field("threads", &self.threads)?;
+        global.serialize_field("json", &self.json)?;
+        global.serialize_field("quiet", &self.quiet)?;
+        global.end()
+    }
+}
+
 impl Context {
-    /// Resolves defaults and checks the directories exist.
-    pub fn from_args(args: &GlobalArgs) -> anyhow::Result<Self> {
-        let assets = bundled_assets();
-        let objects_dir = args
-            .objects_dir
-            .clone()
-            .unwrap_or_else(|| assets.join("objects"));
-        if !objects_dir.is_dir() {
-            anyhow::bail!(
-                "--objects-dir {} is not a directory (it should hold <Name>/model.urdf)",
-                objects_dir.display()
-            );
-        }
-        let split_path = args
-            .split
-            .clone()
-            .unwrap_or_else(|| objects_dir.join("split.json"));
-        let threads = args.threads.unwrap_or_else(|| {
-            std::thread::available_parallelism()
-                .map_or(1, |n| n.get().min(u16::MAX as usize) as u16)
-        });
-        Ok(Self {
-            data: args.data.clone(),
-            assets,
-            objects_dir,
-            split_path,
-            threads,
-            json: args.json.clone(),
-            quiet: args.quiet,
-        })
-    }
-
-    /// The object library.
-    pub fn library(&self) -> ObjectLibrary {
-        ObjectLibrary::new(&self.objects_dir)
-    }
-
     /// The split, read on demand.
     pub fn split(&self) -> anyhow::Result<Split> {
-        Ok(Split::read(&self.split_path)?)
+        Ok(self.split.read()?)
     }
 
     /// Prints a human-readable result line: to stdout, unless the JSON report goes there.
@@ -105,10 +82,5 @@ impl Context {
         );
         bar.set_position(done);
         bar
-    }
-
-    /// Path of the robot assets.
-    pub fn assets(&self) -> &Path {
-        &self.assets
     }
 }

@@ -1,17 +1,31 @@
 //! `graspmap predict`: the trained model's best grasp on a user's 128 × 128 image, with the 8-rotation visualisation.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _};
 use image::RgbImage;
 
-use super::eval::checkpoint_path;
+use super::report::write_report;
 use super::Context;
-use crate::affordance::{rotated_observations, visualisation, Choice};
-use crate::cli::PredictArgs;
-use crate::inference::AffordanceModel;
-use crate::labels::IMAGE_SIZE;
-use crate::output::{save_image_atomic, write_report};
+use crate::data::atomic::save_image_atomic;
+use crate::grasp::rotate::rotated_observations;
+use crate::grasp::IMAGE_SIZE;
+use crate::model::inference::AffordanceModel;
+use crate::model::unet::Precision;
+use crate::policy::affordance::{visualisation, Choice};
+
+/// What `graspmap predict` reads and writes, resolved by the CLI.
+#[derive(Debug, Clone)]
+pub struct PredictConfig {
+    /// A 128 × 128 RGB image (PNG or JPEG).
+    pub image: PathBuf,
+    /// The model's weights.
+    pub checkpoint: PathBuf,
+    /// Where the 512 × 512 visualisation goes.
+    pub out: PathBuf,
+    /// Arithmetic of the network.
+    pub precision: Precision,
+}
 
 /// Everything `predict --json` reports.
 #[derive(Debug, serde::Serialize)]
@@ -35,31 +49,18 @@ pub struct PredictResults {
 }
 
 /// Runs the command.
-pub fn run(context: &Context, args: PredictArgs) -> anyhow::Result<()> {
+pub fn run(context: &Context, args: PredictConfig) -> anyhow::Result<()> {
     let image = read_observation(&args.image)?;
-    let checkpoint = checkpoint_path(context, args.checkpoint.as_deref());
-    tch::set_num_threads(i32::from(context.threads));
-    let precision = args.precision.resolve();
-    let model = AffordanceModel::load(&checkpoint, precision)?;
+    let checkpoint = &args.checkpoint;
+    crate::model::use_threads(context.threads);
+    let precision = args.precision;
+    let model = AffordanceModel::load(checkpoint, precision)?;
     let start = std::time::Instant::now();
     let rotated = rotated_observations(&image);
     let maps = model.predict(&rotated);
     let choice = maps.choose();
     let network_seconds = start.elapsed().as_secs_f64();
-    let out = args.out.clone().unwrap_or_else(|| {
-        let stem = args
-            .image
-            .file_stem()
-            .map_or_else(|| "image".into(), |s| s.to_string_lossy().into_owned());
-        context
-            .data
-            .join("affordance")
-            .join("predict_vis")
-            .join(format!("{stem}.png"))
-    });
-    if let Some(dir) = out.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    }
+    let out = args.out.clone();
     save_image_atomic(&visualisation(&rotated, &maps, &choice), &out)?;
     let g = choice.grasp;
     context.say(&format!(

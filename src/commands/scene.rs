@@ -4,10 +4,25 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 
+use std::path::PathBuf;
+
+use super::report::write_report;
 use super::Context;
-use crate::cli::SceneArgs;
-use crate::output::{save_image_atomic, write_report};
+use crate::data::atomic::save_image_atomic;
 use crate::sim::{Workcell, WorkcellConfig};
+
+/// What `graspmap scene` drops and where it writes the views.
+#[derive(Debug, Clone)]
+pub struct SceneConfig {
+    /// Object names, dropped in this order.
+    pub objects: Vec<String>,
+    /// Seed of the drop poses.
+    pub seed: u64,
+    /// The RGB image (.png).
+    pub out: PathBuf,
+    /// The depth image as 16-bit PNG in millimetres, if wanted.
+    pub depth: Option<PathBuf>,
+}
 
 #[derive(serde::Serialize)]
 struct SceneResults {
@@ -28,12 +43,11 @@ struct ObjectResult {
 }
 
 /// Runs the command.
-pub fn run(context: &Context, args: SceneArgs) -> anyhow::Result<()> {
+pub fn run(context: &Context, args: SceneConfig) -> anyhow::Result<()> {
     let start = Instant::now();
-    let library = context.library();
-    let models = library.load_all(&args.objects)?;
+    let models = context.objects.load_all(&args.objects)?;
     let config = WorkcellConfig::default();
-    let mut cell = Workcell::new(context.assets(), &config)?;
+    let mut cell = Workcell::new(&config)?;
     cell.drop_objects(&models, args.seed)?;
     let frame = cell.capture();
     save_image_atomic(&frame.to_rgb_image(), &args.out)

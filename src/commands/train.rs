@@ -6,17 +6,28 @@ use std::time::Instant;
 use anyhow::{bail, Context as _};
 use tch::nn;
 
+use super::report::write_report;
 use super::Context;
-use crate::augment::AugmentConfig;
-use crate::cli::TrainArgs;
-use crate::dataset::{load_dataset, split_train_validation, training_sample, LabelledImage};
-use crate::labels::{LabelStore, IMAGE_SIZE};
-use crate::output::{save_image_atomic, write_atomic, write_report};
-use crate::train::{
-    read_checkpoint, save_checkpoint, train_epoch, validate, Adam, CheckpointMeta, EpochRecord,
-    Plateau, Subset, TrainConfig,
+use crate::data::atomic::{save_image_atomic, write_atomic};
+use crate::data::augment::AugmentConfig;
+use crate::data::dataset::{load_dataset, split_train_validation, training_sample, LabelledImage};
+use crate::data::labels::LabelStore;
+use crate::grasp::IMAGE_SIZE;
+use crate::model::train::{
+    load_weights, predict_map, read_checkpoint, save_checkpoint, train_epoch, validate, Adam,
+    CheckpointMeta, EpochRecord, Plateau, Subset, TrainConfig,
 };
-use crate::unet::MiniUNet;
+use crate::model::unet::{MiniUNet, Precision};
+use crate::vision::colormap::viridis;
+
+/// What `graspmap train` runs.
+#[derive(Debug, Clone)]
+pub struct TrainOptions {
+    /// The training run's settings.
+    pub config: TrainConfig,
+    /// Continue from DATA/affordance/last.* exactly where it stopped.
+    pub resume: bool,
+}
 
 #[derive(Debug, serde::Serialize)]
 struct TrainResults {
@@ -32,20 +43,18 @@ struct TrainResults {
     checkpoint: String,
 }
 
+/// The network, its optimiser and the state that a checkpoint carries.
+struct Run {
+    vs: nn::VarStore,
+    net: MiniUNet,
+    adam: Adam,
+    meta: CheckpointMeta,
+}
+
 /// Runs the command.
-pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
-    let config = TrainConfig {
-        epochs: args.epochs,
-        batch_size: args.batch_size as usize,
-        lr: args.lr,
-        seed: args.seed,
-        precision: args.precision.resolve(),
-        ..TrainConfig::default()
-    };
-    if !(config.lr > 0.0 && config.lr.is_finite()) {
-        bail!("--lr {} must be a positive number", config.lr);
-    }
-    tch::set_num_threads(context.threads as i32);
+pub fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()> {
+    let config = options.config;
+    crate::model::use_threads(context.threads);
     tch::manual_seed(config.seed as i64);
     let store = LabelStore::new(context.data.join("labels"));
     let images = load_dataset(&store)?;
@@ -57,125 +66,29 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
         );
     }
     let out_dir = context.data.join("affordance");
-    let mut vs = nn::VarStore::new(tch::Device::Cpu);
-    let net = MiniUNet::new(&vs.root());
-    let mut adam = Adam::new(&vs, config.lr);
-
-    let mut meta = if args.resume {
-        let (tensors, mut meta) = read_checkpoint(&out_dir, "last")?;
-        if meta.config.seed != config.seed
-            || meta.config.batch_size != config.batch_size
-            || meta.config.lr != config.lr
-            || meta.config.precision != config.precision
-        {
-            bail!(
-                "{} was trained with --seed {} --batch-size {} --lr {} --precision {}; resume with the same values",
-                out_dir.join("last.json").display(),
-                meta.config.seed,
-                meta.config.batch_size,
-                meta.config.lr,
-                serde_json::to_value(meta.config.precision)?.as_str().unwrap_or("?")
-            );
-        }
-        let known = meta.train_indices.len() + meta.val_indices.len();
-        if known != images.len() {
-            bail!(
-                "the labels changed since {} ({} images then, {} now); train from scratch",
-                out_dir.join("last.json").display(),
-                known,
-                images.len()
-            );
-        }
-        crate::train::load_weights(&mut vs, &tensors, &out_dir.join("last.safetensors"))?;
-        adam.restore(&tensors, meta.adam_steps)?;
-        adam.lr = meta.lr;
-        meta.config.epochs = config.epochs;
-        meta
-    } else {
-        let (train_indices, val_indices) = split_train_validation(images.len(), config.seed);
-        CheckpointMeta {
-            schema: CheckpointMeta::SCHEMA.to_owned(),
-            config: config.clone(),
-            epoch: 0,
-            history: Vec::new(),
-            best_val_loss: f64::INFINITY,
-            best_epoch: 0,
-            lr: config.lr,
-            plateau: Plateau::default(),
-            adam_steps: 0,
-            train_indices,
-            val_indices,
-        }
-    };
-    if meta.epoch >= config.epochs {
+    let mut run = start(&config, &out_dir, images.len(), options.resume)?;
+    if run.meta.epoch >= config.epochs {
         context.say(&format!(
             "already trained {} epochs (--epochs {}); nothing to do",
-            meta.epoch, config.epochs
+            run.meta.epoch, config.epochs
         ));
     }
 
     let start = Instant::now();
     let augment = AugmentConfig::default();
-    let bar = context.progress_bar("epochs", config.epochs as u64, meta.epoch as u64);
-    let vis_dir = out_dir.join("training_vis");
-    while meta.epoch < config.epochs {
-        let epoch = meta.epoch + 1;
-        let epoch_start = Instant::now();
-        let batches = meta.train_indices.len().div_ceil(config.batch_size);
-        let train_loss = train_epoch(
-            &net,
-            &mut adam,
-            Subset {
-                images: &images,
-                indices: &meta.train_indices,
-            },
-            &config,
-            epoch,
-            &augment,
-            |b, loss| {
-                bar.set_message(format!(
-                    "epoch {epoch} batch {}/{batches} loss {loss:.5}",
-                    b + 1
-                ))
-            },
-        );
-        let val_loss = validate(
-            &net,
-            Subset {
-                images: &images,
-                indices: &meta.val_indices,
-            },
-            &config,
-        );
-        meta.history.push(EpochRecord {
-            epoch,
-            train_loss,
-            val_loss,
-            lr: adam.lr,
-            seconds: epoch_start.elapsed().as_secs_f64(),
-        });
-        adam.lr = meta.plateau.update(val_loss, adam.lr, &config);
-        meta.epoch = epoch;
-        meta.lr = adam.lr;
-        meta.adam_steps = adam.steps();
-        let improved = val_loss < meta.best_val_loss;
-        if improved {
-            meta.best_val_loss = val_loss;
-            meta.best_epoch = epoch;
-            save_checkpoint(&vs, &[], &meta, &out_dir, "best")?;
-        }
-        save_checkpoint(&vs, &adam.named_state(), &meta, &out_dir, "last")?;
-        write_losses_csv(&out_dir.join("losses.csv"), &meta.history)?;
-        save_loss_curve(&out_dir.join("losses.png"), &meta.history)?;
-        if let Some(&first) = meta.val_indices.first() {
-            save_training_vis(&net, &images[first], &vis_dir, epoch, config.precision)?;
-        }
+    let bar = context.progress_bar("epochs", config.epochs as u64, run.meta.epoch as u64);
+    while run.meta.epoch < config.epochs {
+        let improved = run.epoch(&images, &config, &augment, &out_dir, &bar)?;
         bar.inc(1);
+        let record = run.meta.history.last().copied();
         bar.suspend(|| {
-            if !context.quiet {
+            if let (false, Some(r)) = (context.quiet, record) {
                 eprintln!(
-                    "epoch {epoch:>3}: train {train_loss:.5}  val {val_loss:.5}  lr {:.0e}{}",
-                    meta.history.last().map_or(0.0, |r| r.lr),
+                    "epoch {:>3}: train {:.5}  val {:.5}  lr {:.0e}{}",
+                    r.epoch,
+                    r.train_loss,
+                    r.val_loss,
+                    r.lr,
                     if improved { "  best" } else { "" }
                 );
             }
@@ -183,6 +96,7 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
     }
     bar.finish_and_clear();
 
+    let meta = &run.meta;
     let last = meta.history.last();
     let results = TrainResults {
         labels: images.len(),
@@ -212,11 +126,148 @@ pub fn run(context: &Context, args: TrainArgs) -> anyhow::Result<()> {
             "global": context,
             "train": config,
             "augment": augment,
-            "resume": args.resume,
+            "resume": options.resume,
         });
         write_report(json, "train", config.seed, &resolved, &results)?;
     }
     Ok(())
+}
+
+/// A fresh network with its 90/10 split, or the run that last.* holds.
+fn start(
+    config: &TrainConfig,
+    out_dir: &Path,
+    n_images: usize,
+    resume: bool,
+) -> anyhow::Result<Run> {
+    let mut vs = nn::VarStore::new(tch::Device::Cpu);
+    let net = MiniUNet::new(&vs.root());
+    let mut adam = Adam::new(&vs, config.lr);
+    if !resume {
+        let (train_indices, val_indices) = split_train_validation(n_images, config.seed);
+        let meta = CheckpointMeta {
+            schema: CheckpointMeta::SCHEMA.to_owned(),
+            config: config.clone(),
+            epoch: 0,
+            history: Vec::new(),
+            best_val_loss: f64::INFINITY,
+            best_epoch: 0,
+            lr: config.lr,
+            plateau: Plateau::default(),
+            adam_steps: 0,
+            train_indices,
+            val_indices,
+        };
+        return Ok(Run {
+            vs,
+            net,
+            adam,
+            meta,
+        });
+    }
+    let (tensors, mut meta) = read_checkpoint(out_dir, "last")?;
+    let saved = &meta.config;
+    if saved.seed != config.seed
+        || saved.batch_size != config.batch_size
+        || saved.lr != config.lr
+        || saved.precision != config.precision
+    {
+        bail!(
+            "{} was trained with --seed {} --batch-size {} --lr {} --precision {}; resume with the same values",
+            out_dir.join("last.json").display(),
+            saved.seed,
+            saved.batch_size,
+            saved.lr,
+            saved.precision.name()
+        );
+    }
+    let known = meta.train_indices.len() + meta.val_indices.len();
+    if known != n_images {
+        bail!(
+            "the labels changed since {} ({} images then, {} now); train from scratch",
+            out_dir.join("last.json").display(),
+            known,
+            n_images
+        );
+    }
+    load_weights(&mut vs, &tensors, &out_dir.join("last.safetensors"))?;
+    adam.restore(&tensors, meta.adam_steps)?;
+    adam.lr = meta.lr;
+    meta.config.epochs = config.epochs;
+    Ok(Run {
+        vs,
+        net,
+        adam,
+        meta,
+    })
+}
+
+impl Run {
+    /// Trains and validates one epoch, then saves best.* (when validation improved), last.*,
+    /// the loss table and curve, and the epoch's visualisation. Returns whether it improved.
+    fn epoch(
+        &mut self,
+        images: &[LabelledImage],
+        config: &TrainConfig,
+        augment: &AugmentConfig,
+        out_dir: &Path,
+        bar: &indicatif::ProgressBar,
+    ) -> anyhow::Result<bool> {
+        let meta = &mut self.meta;
+        let epoch = meta.epoch + 1;
+        let epoch_start = Instant::now();
+        let batches = meta.train_indices.len().div_ceil(config.batch_size);
+        let train_loss = train_epoch(
+            &self.net,
+            &mut self.adam,
+            Subset {
+                images,
+                indices: &meta.train_indices,
+            },
+            config,
+            epoch,
+            augment,
+            |b, loss| {
+                bar.set_message(format!(
+                    "epoch {epoch} batch {}/{batches} loss {loss:.5}",
+                    b + 1
+                ))
+            },
+        );
+        let val_loss = validate(
+            &self.net,
+            Subset {
+                images,
+                indices: &meta.val_indices,
+            },
+            config,
+        );
+        meta.history.push(EpochRecord {
+            epoch,
+            train_loss,
+            val_loss,
+            lr: self.adam.lr,
+            seconds: epoch_start.elapsed().as_secs_f64(),
+        });
+        self.adam.lr = meta.plateau.update(val_loss, self.adam.lr, config);
+        meta.epoch = epoch;
+        meta.lr = self.adam.lr;
+        meta.adam_steps = self.adam.steps();
+        let improved = val_loss < meta.best_val_loss;
+        if improved {
+            meta.best_val_loss = val_loss;
+            meta.best_epoch = epoch;
+            save_checkpoint(&self.vs, &[], meta, out_dir, "best")?;
+        }
+        save_checkpoint(&self.vs, &self.adam.named_state(), meta, out_dir, "last")?;
+        write_losses_csv(&out_dir.join("losses.csv"), &meta.history)?;
+        save_loss_curve(&out_dir.join("losses.png"), &meta.history)?;
+        if let Some(&first) = meta.val_indices.first() {
+            let vis_dir = out_dir.join("training_vis");
+            save_training_vis(&self.net, &images[first], &vis_dir, epoch, config.precision)?;
+        }
+        Ok(improved)
+    }
 }
 
 fn write_losses_csv(path: &Path, history: &[EpochRecord]) -> anyhow::Result<()> {
@@ -301,16 +352,16 @@ fn save_loss_curve(path: &Path, history: &[EpochRecord]) -> anyhow::Result<()> {
     save_image_atomic(&image, path)
 }
 
-/// input | prediction | target, 128 × 384 (SPEC §7), for one fixed validation image.
+/// input | prediction | target, 384 × 128, for one fixed validation image.
 fn save_training_vis(
     net: &MiniUNet,
     item: &LabelledImage,
     dir: &Path,
     epoch: u32,
-    precision: crate::unet::Precision,
+    precision: Precision,
 ) -> anyhow::Result<()> {
     let sample = training_sample(item, None);
-    let prediction = crate::train::predict_map(net, &sample, precision);
+    let prediction = predict_map(net, &sample, precision);
     let size = IMAGE_SIZE;
     let mut image = image::RgbImage::new(size * 3, size);
     for y in 0..size {
@@ -319,16 +370,8 @@ fn save_training_vis(
             let plane = (size * size) as usize;
             let rgb = [0, 1, 2].map(|c| (sample.input[c * plane + i] * 255.0).round() as u8);
             image.put_pixel(x, y, image::Rgb(rgb));
-            image.put_pixel(
-                size + x,
-                y,
-                image::Rgb(crate::render::viridis(prediction[i])),
-            );
-            image.put_pixel(
-                2 * size + x,
-                y,
-                image::Rgb(crate::render::viridis(sample.target[i])),
-            );
+            image.put_pixel(size + x, y, image::Rgb(viridis(prediction[i])));
+            image.put_pixel(2 * size + x, y, image::Rgb(viridis(sample.target[i])));
         }
     }
     save_image_atomic(&image, &dir.join(format!("{epoch:03}.png")))

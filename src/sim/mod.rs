@@ -3,10 +3,9 @@
 //! Everything here uses rapier's own math types (glam, f32); the closed-form IK in
 //! `kinematics` works in nalgebra f64 and is converted at its call sites in `pick`.
 
+pub mod kinematics;
 pub mod pick;
 pub mod robot;
-
-use std::path::Path;
 
 use anyhow::Context;
 use rand::{Rng, SeedableRng};
@@ -14,28 +13,23 @@ use rand_chacha::ChaCha8Rng;
 use rapier3d::math::{Pose, Rotation, Vector};
 use rapier3d::prelude::*;
 
-use crate::objects::ObjectModel;
-use crate::render::{Drawable, Shape};
-use crate::urdf::CollisionShape;
+use crate::assets::objects::ObjectModel;
+use crate::assets::urdf::CollisionShape;
+use crate::grasp::tote::{self, Tote, PICK_TOTE, PLACE_TOTE};
+use crate::vision::camera::Camera;
+use crate::vision::render::{Drawable, Shape};
 use robot::{groups, Arm, Gripper};
 
 /// Physics rate (Hz). 240 Hz kept thin fingers from tunnelling through small objects.
 pub const PHYSICS_HZ: f32 = 240.0;
 
-/// Where bin 1 (pick) and bin 2 (place) are centred (SPEC §2).
-pub const BIN1_CENTER: Vector = Vector::new(0.5, 0.0, 0.01);
-/// Bin 2 (place) centre.
-pub const BIN2_CENTER: Vector = Vector::new(-0.5, 0.0, 0.01);
-/// Inner floor half extents (x, y) of a tote.
-pub const BIN_INNER_HALF: [f32; 2] = [0.30, 0.40];
-/// Top surface of a tote's floor (m).
-pub const BIN_FLOOR_TOP: f32 = 0.02;
-/// Height of the tote walls' top edge (m).
-pub const BIN_WALL_TOP: f32 = 0.21;
-const BIN_WALL_THICKNESS: f32 = 0.03;
 /// Robot base position on top of the pedestal.
 pub const ROBOT_BASE: Vector = Vector::new(0.0, 0.0, 0.4);
 const PEDESTAL_RADIUS: f32 = 0.0734;
+/// How far below a tote's floor top an object's centre may be and still count as inside (m).
+const LOCATE_BELOW_FLOOR: f32 = 0.01;
+/// How far above a tote's wall tops an object's centre may be and still count as inside (m).
+const LOCATE_ABOVE_WALLS: f32 = 0.3;
 
 /// Friction of the totes, ground and pads; combined by multiplication, so contacts take the object's μ.
 pub const ENVIRONMENT_FRICTION: f32 = 1.0;
@@ -44,6 +38,19 @@ pub const ENVIRONMENT_FRICTION: f32 = 1.0;
 pub const OBJECT_ANGULAR_DAMPING: f32 = 1.0;
 /// Consecutive still steps (0.25 s) that count as settled.
 const SETTLED_STEPS: u32 = 60;
+/// An object moving slower than this (m/s) and turning slower than [`STILL_ANGULAR_SPEED`]
+/// is still.
+const STILL_LINEAR_SPEED: f32 = 0.005;
+/// See [`STILL_LINEAR_SPEED`] (rad/s).
+const STILL_ANGULAR_SPEED: f32 = 0.05;
+/// Longest wait for a dropped object to settle before the next falls (s).
+const MAX_SETTLE_SECONDS: f32 = 4.0;
+/// Drop positions (the reference's): x and y over bin 1's middle, height above the ground (m).
+const DROP_X: [f32; 2] = [0.38, 0.62];
+/// See [`DROP_X`].
+const DROP_Y: [f32; 2] = [-0.22, 0.22];
+/// See [`DROP_X`].
+const DROP_HEIGHT: [f32; 2] = [0.2, 0.7];
 
 /// Settings of a workcell that users may change.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
@@ -75,7 +82,7 @@ pub struct SceneObject {
     pub id: u16,
 }
 
-/// Where an object ended up, by the rules of SPEC §8.
+/// Where an object ended up: resting inside a tote's inner volume, or lost.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ObjectLocation {
@@ -97,6 +104,7 @@ pub struct Workcell {
     environment: Vec<ColliderHandle>,
     steps: u64,
     recorder: Option<Recorder>,
+    camera: Camera,
 }
 
 /// Renders an extra view every few steps while the arm moves (for `--record`), on a thread of
@@ -112,104 +120,14 @@ struct Recorder {
 }
 
 impl Workcell {
-    /// Builds the empty workcell with the robot at home; `assets` holds ur5/ur5.urdf.
-    pub fn new(assets: &Path, config: &WorkcellConfig) -> anyhow::Result<Self> {
+    /// Builds the empty workcell with the robot at home.
+    pub fn new(config: &WorkcellConfig) -> anyhow::Result<Self> {
         let mut world = PhysicsWorld::new();
-        world.gravity = Vector::new(0.0, 0.0, -9.8);
-        let p = &mut world.integration_parameters;
-        p.dt = 1.0 / PHYSICS_HZ;
-        p.friction_model = FrictionModel::Coulomb;
-        // The default recycling distance (5 cm) lets fingers pass through small objects.
-        p.normalized_contact_recycle_distance = 0.001;
-        p.contact_softness = SpringCoefficients::new(120.0, 10.0);
-        p.num_solver_iterations = 8;
-
-        let mut scenery = Vec::new();
-        let mut environment = Vec::new();
-        let ground_color = [0.55, 0.55, 0.52];
-        let tote_color = [0.38, 0.39, 0.41];
-        let mut add_fixed_box = |world: &mut PhysicsWorld,
-                                 scenery: &mut Vec<Drawable>,
-                                 center: Vector,
-                                 half: Vector,
-                                 color: [f32; 3]| {
-            let handle = world.insert_collider(
-                ColliderBuilder::cuboid(half.x, half.y, half.z)
-                    .translation(center)
-                    .friction(ENVIRONMENT_FRICTION)
-                    .friction_combine_rule(CoefficientCombineRule::Multiply)
-                    .collision_groups(groups::environment()),
-                None,
-            );
-            environment.push(handle);
-            scenery.push(Drawable {
-                shape: Shape::Cuboid { half_extents: half },
-                pose: Pose::from_translation(center),
-                color,
-                id: 0,
-            });
-        };
-        add_fixed_box(
-            &mut world,
-            &mut scenery,
-            Vector::new(0.0, 0.0, -0.05),
-            Vector::new(2.0, 2.0, 0.05),
-            ground_color,
-        );
-        for center in [BIN1_CENTER, BIN2_CENTER] {
-            let [hx, hy] = BIN_INNER_HALF;
-            let t = BIN_WALL_THICKNESS;
-            add_fixed_box(
-                &mut world,
-                &mut scenery,
-                Vector::new(center.x, center.y, BIN_FLOOR_TOP / 2.0),
-                Vector::new(hx + t, hy + t, BIN_FLOOR_TOP / 2.0),
-                tote_color,
-            );
-            let wall_half_z = (BIN_WALL_TOP - BIN_FLOOR_TOP) / 2.0;
-            let wall_z = BIN_FLOOR_TOP + wall_half_z;
-            for sx in [-1.0, 1.0] {
-                add_fixed_box(
-                    &mut world,
-                    &mut scenery,
-                    Vector::new(center.x + sx * (hx + t / 2.0), center.y, wall_z),
-                    Vector::new(t / 2.0, hy + t, wall_half_z),
-                    tote_color,
-                );
-            }
-            for sy in [-1.0, 1.0] {
-                add_fixed_box(
-                    &mut world,
-                    &mut scenery,
-                    Vector::new(center.x, center.y + sy * (hy + t / 2.0), wall_z),
-                    Vector::new(hx, t / 2.0, wall_half_z),
-                    tote_color,
-                );
-            }
-        }
-        let pedestal_pose = Pose::from_parts(
-            Vector::new(0.0, 0.0, ROBOT_BASE.z / 2.0),
-            Rotation::from_rotation_x(std::f32::consts::FRAC_PI_2),
-        );
-        world.insert_collider(
-            ColliderBuilder::cylinder(ROBOT_BASE.z / 2.0, PEDESTAL_RADIUS)
-                .position(pedestal_pose)
-                .collision_groups(groups::pedestal()),
-            None,
-        );
-        scenery.push(Drawable {
-            shape: Shape::Cylinder {
-                radius: PEDESTAL_RADIUS,
-                half_height: ROBOT_BASE.z / 2.0,
-            },
-            pose: pedestal_pose,
-            color: [0.5, 0.5, 0.5],
-            id: 0,
-        });
-
+        configure_solver(&mut world);
+        let (scenery, environment) = build_scenery(&mut world);
         let arm = Arm::load(
             &mut world,
-            &assets.join("ur5").join("ur5.urdf"),
+            crate::assets::UR5_URDF,
             Pose::from_translation(ROBOT_BASE),
         )?;
         let tool0 = arm.tool0_pose(&arm.joints);
@@ -223,7 +141,13 @@ impl Workcell {
             environment,
             steps: 0,
             recorder: None,
+            camera: Camera::top_down(),
         })
+    }
+
+    /// The top-down camera that every observation of the bin is taken with.
+    pub fn camera(&self) -> &Camera {
+        &self.camera
     }
 
     /// Simulated time so far (s).
@@ -242,7 +166,7 @@ impl Workcell {
     }
 
     /// Current arm joints.
-    pub fn joints(&self) -> crate::kinematics::Joints {
+    pub fn joints(&self) -> crate::sim::kinematics::Joints {
         self.arm.joints
     }
 
@@ -251,13 +175,14 @@ impl Workcell {
         self.arm.tool0_pose(&self.arm.joints)
     }
 
-    /// Starts recording frames of `camera` every `every` steps.
-    pub fn start_recording(&mut self, camera: crate::camera::Camera, every: u64) {
+    /// Starts recording frames of the oblique view of the whole workcell every `every` steps.
+    pub fn start_recording(&mut self, every: u64) {
+        let camera = oblique_camera();
         let (scenes, received) = std::sync::mpsc::channel::<Vec<Drawable>>();
         let renderer = std::thread::spawn(move || {
             received
                 .iter()
-                .map(|scene| crate::render::render(&camera, &scene).to_rgb_image())
+                .map(|scene| crate::vision::render::render(&camera, &scene).to_rgb_image())
                 .collect()
         });
         self.recorder = Some(Recorder {
@@ -331,16 +256,16 @@ impl Workcell {
         Ok(self.objects.len() - 1)
     }
 
-    /// Drops objects one after another into bin 1 from seeded random poses (SPEC §2), each
+    /// Drops objects one after another into bin 1 from seeded random poses (docs/workcell.md), each
     /// settling before the next falls, with the parked arm's colliders switched off.
     pub fn drop_objects(&mut self, models: &[ObjectModel], seed: u64) -> anyhow::Result<()> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         self.set_robot_collisions(false);
         for model in models {
             let position = Vector::new(
-                rng.random_range(0.38..=0.62),
-                rng.random_range(-0.22..=0.22),
-                rng.random_range(0.2..=0.7),
+                rng.random_range(DROP_X[0]..=DROP_X[1]),
+                rng.random_range(DROP_Y[0]..=DROP_Y[1]),
+                rng.random_range(DROP_HEIGHT[0]..=DROP_HEIGHT[1]),
             );
             let pi = std::f32::consts::PI;
             let rotation = Rotation::from_euler(
@@ -350,7 +275,7 @@ impl Workcell {
                 rng.random_range(-pi..=pi),
             );
             self.add_object(model, Pose::from_parts(position, rotation))?;
-            self.settle(4.0);
+            self.settle(MAX_SETTLE_SECONDS);
         }
         self.set_robot_collisions(true);
         Ok(())
@@ -367,7 +292,9 @@ impl Workcell {
             steps += 1;
             let moving = self.objects.iter().any(|o| {
                 let b = &self.world.bodies[o.body];
-                !b.is_sleeping() && (b.linvel().length() > 0.005 || b.angvel().length() > 0.05)
+                !b.is_sleeping()
+                    && (b.linvel().length() > STILL_LINEAR_SPEED
+                        || b.angvel().length() > STILL_ANGULAR_SPEED)
             });
             calm = if moving { 0 } else { calm + 1 };
             // A rocking object is briefly still at each turn; a calm spell this long is rest.
@@ -385,7 +312,7 @@ impl Workcell {
     }
 
     /// Schedules arm links and palm to reach `q` at the end of the next step.
-    pub(crate) fn drive_arm(&mut self, q: crate::kinematics::Joints) {
+    pub(crate) fn drive_arm(&mut self, q: crate::sim::kinematics::Joints) {
         self.arm.drive(&mut self.world, q);
         let tool0 = self.arm.tool0_pose(&q);
         self.gripper.drive(&mut self.world, tool0);
@@ -437,23 +364,23 @@ impl Workcell {
         out
     }
 
-    /// Renders the top-down camera (SPEC §3).
-    pub fn capture(&self) -> crate::render::Frame {
-        crate::render::render(&crate::camera::Camera::top_down(), &self.drawables())
+    /// Renders the top-down camera (docs/camera.md).
+    pub fn capture(&self) -> crate::vision::render::Frame {
+        crate::vision::render::render(&self.camera, &self.drawables())
     }
 
     /// Where an object is, by its centre: inside a tote's inner volume, or lost.
     pub fn locate(&self, index: usize) -> ObjectLocation {
         let p = self.object_pose(index).translation;
-        let inside = |c: Vector| {
-            (p.x - c.x).abs() <= BIN_INNER_HALF[0]
-                && (p.y - c.y).abs() <= BIN_INNER_HALF[1]
-                && p.z >= BIN_FLOOR_TOP - 0.01
-                && p.z <= BIN_WALL_TOP + 0.3
+        let inside = |tote: &Tote| {
+            (p.x - tote.center[0]).abs() <= tote.inner_half[0]
+                && (p.y - tote.center[1]).abs() <= tote.inner_half[1]
+                && p.z >= tote.floor_top - LOCATE_BELOW_FLOOR
+                && p.z <= tote.wall_top + LOCATE_ABOVE_WALLS
         };
-        if inside(BIN1_CENTER) {
+        if inside(&PICK_TOTE) {
             ObjectLocation::Bin1
-        } else if inside(BIN2_CENTER) {
+        } else if inside(&PLACE_TOTE) {
             ObjectLocation::Bin2
         } else {
             ObjectLocation::Lost
@@ -510,6 +437,120 @@ pub(crate) fn in_contact(
 
 /// Facets around a round collision shape. Rapier has no rolling resistance, so exactly round
 /// cans and balls rolled on for seconds; faceted hulls (like the convex decompositions of real
+
+/// The oblique view of the whole workcell that recordings show.
+pub fn oblique_camera() -> Camera {
+    Camera::look_at(
+        Vector::new(1.35, -1.25, 1.25),
+        Vector::new(0.0, 0.0, 0.25),
+        Vector::Z,
+        45.0,
+        320,
+        240,
+    )
+}
+
+/// Solver settings the grasps depend on.
+fn configure_solver(world: &mut PhysicsWorld) {
+    world.gravity = Vector::new(0.0, 0.0, -9.8);
+    let p = &mut world.integration_parameters;
+    p.dt = 1.0 / PHYSICS_HZ;
+    p.friction_model = FrictionModel::Coulomb;
+    // The default recycling distance (5 cm) lets fingers pass through small objects.
+    p.normalized_contact_recycle_distance = 0.001;
+    p.contact_softness = SpringCoefficients::new(120.0, 10.0);
+    p.num_solver_iterations = 8;
+}
+
+/// The fixed scenery (ground, both totes, the pedestal): its drawables, and the environment's
+/// colliders that the arm must not touch.
+fn build_scenery(world: &mut PhysicsWorld) -> (Vec<Drawable>, Vec<ColliderHandle>) {
+    let mut scenery = Vec::new();
+    let mut environment = Vec::new();
+    let ground_color = [0.55, 0.55, 0.52];
+    let tote_color = [0.38, 0.39, 0.41];
+    let mut add_fixed_box = |world: &mut PhysicsWorld,
+                             scenery: &mut Vec<Drawable>,
+                             center: Vector,
+                             half: Vector,
+                             color: [f32; 3]| {
+        let handle = world.insert_collider(
+            ColliderBuilder::cuboid(half.x, half.y, half.z)
+                .translation(center)
+                .friction(ENVIRONMENT_FRICTION)
+                .friction_combine_rule(CoefficientCombineRule::Multiply)
+                .collision_groups(groups::environment()),
+            None,
+        );
+        environment.push(handle);
+        scenery.push(Drawable {
+            shape: Shape::Cuboid { half_extents: half },
+            pose: Pose::from_translation(center),
+            color,
+            id: 0,
+        });
+    };
+    add_fixed_box(
+        world,
+        &mut scenery,
+        Vector::new(0.0, 0.0, -0.05),
+        Vector::new(2.0, 2.0, 0.05),
+        ground_color,
+    );
+    for tote in [PICK_TOTE, PLACE_TOTE] {
+        let center = Vector::new(tote.center[0], tote.center[1], 0.0);
+        let [hx, hy] = tote.inner_half;
+        let t = tote::WALL_THICKNESS;
+        add_fixed_box(
+            world,
+            &mut scenery,
+            Vector::new(center.x, center.y, tote.floor_top / 2.0),
+            Vector::new(hx + t, hy + t, tote.floor_top / 2.0),
+            tote_color,
+        );
+        let wall_half_z = (tote.wall_top - tote.floor_top) / 2.0;
+        let wall_z = tote.floor_top + wall_half_z;
+        for sx in [-1.0, 1.0] {
+            add_fixed_box(
+                world,
+                &mut scenery,
+                Vector::new(center.x + sx * (hx + t / 2.0), center.y, wall_z),
+                Vector::new(t / 2.0, hy + t, wall_half_z),
+                tote_color,
+            );
+        }
+        for sy in [-1.0, 1.0] {
+            add_fixed_box(
+                world,
+                &mut scenery,
+                Vector::new(center.x, center.y + sy * (hy + t / 2.0), wall_z),
+                Vector::new(hx, t / 2.0, wall_half_z),
+                tote_color,
+            );
+        }
+    }
+    let pedestal_pose = Pose::from_parts(
+        Vector::new(0.0, 0.0, ROBOT_BASE.z / 2.0),
+        Rotation::from_rotation_x(std::f32::consts::FRAC_PI_2),
+    );
+    world.insert_collider(
+        ColliderBuilder::cylinder(ROBOT_BASE.z / 2.0, PEDESTAL_RADIUS)
+            .position(pedestal_pose)
+            .collision_groups(groups::pedestal()),
+        None,
+    );
+    scenery.push(Drawable {
+        shape: Shape::Cylinder {
+            radius: PEDESTAL_RADIUS,
+            half_height: ROBOT_BASE.z / 2.0,
+        },
+        pose: pedestal_pose,
+        color: [0.5, 0.5, 0.5],
+        id: 0,
+    });
+    (scenery, environment)
+}
+
 /// object meshes) come to rest.
 const ROUND_FACETS: usize = 24;
 
@@ -568,20 +609,17 @@ fn sphere_points(r: f32, half: f32) -> Vec<Vector> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::kinematics::Ur5;
+    use crate::sim::kinematics::Ur5;
     use rand::Rng;
-
-    fn assets() -> &'static Path {
-        Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/assets"))
-    }
 
     #[test]
     fn urdf_chain_and_closed_form_kinematics_agree() {
-        let cell = Workcell::new(assets(), &WorkcellConfig::default()).unwrap();
+        let cell = Workcell::new(&WorkcellConfig::default()).unwrap();
         let ur5 = Ur5::new(pick::to_isometry(&Pose::from_translation(ROBOT_BASE)));
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         for _ in 0..200 {
-            let q: crate::kinematics::Joints = std::array::from_fn(|_| rng.random_range(-3.0..3.0));
+            let q: crate::sim::kinematics::Joints =
+                std::array::from_fn(|_| rng.random_range(-3.0..3.0));
             let urdf = cell.arm.tool0_pose(&q);
             let dh = ur5.forward(&q);
             let t = dh.translation.vector;
@@ -595,18 +633,18 @@ mod tests {
 
     #[test]
     fn home_pose_parks_the_hand_outside_the_camera_view_of_the_bin() {
-        let cell = Workcell::new(assets(), &WorkcellConfig::default()).unwrap();
+        let cell = Workcell::new(&WorkcellConfig::default()).unwrap();
         let tool0 = cell.tool0_pose().translation;
         assert!((tool0 - Vector::new(0.487, 0.109, 0.832)).length() < 0.002);
         // An empty bin renders with no robot pixels inside the tote's floor area.
         let frame = cell.capture();
-        let camera = crate::camera::Camera::top_down();
+        let camera = crate::vision::camera::Camera::top_down();
         let mut floor_pixels = 0;
         for v in 0..128 {
             for u in 0..128 {
                 let p = camera.pixel_to_world(u, v, frame.depth_at(u, v));
-                let over_floor = (p.x - BIN1_CENTER.x).abs() < BIN_INNER_HALF[0] - 0.01
-                    && (p.y - BIN1_CENTER.y).abs() < BIN_INNER_HALF[1] - 0.01;
+                let over_floor = (p.x - PICK_TOTE.center[0]).abs() < PICK_TOTE.inner_half[0] - 0.01
+                    && (p.y - PICK_TOTE.center[1]).abs() < PICK_TOTE.inner_half[1] - 0.01;
                 if over_floor {
                     floor_pixels += 1;
                     assert!(
@@ -624,8 +662,8 @@ mod tests {
 
     #[test]
     fn objects_are_located_by_bin() {
-        let mut cell = Workcell::new(assets(), &WorkcellConfig::default()).unwrap();
-        let library = crate::objects::ObjectLibrary::new(assets().join("objects"));
+        let mut cell = Workcell::new(&WorkcellConfig::default()).unwrap();
+        let library = crate::assets::objects::ObjectLibrary::bundled();
         let ball = library.load("YcbTennisBall").unwrap();
         for (position, expected) in [
             (Vector::new(0.5, 0.1, 0.06), ObjectLocation::Bin1),

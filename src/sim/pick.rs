@@ -1,4 +1,4 @@
-//! The pick sequence (SPEC §4): open, approach, straight descent, close, lift, home, check, and place in bin 2.
+//! The pick sequence (docs/grasping.md): open, approach, straight descent, close, lift, home, check, and place in bin 2.
 //!
 //! Every motion is simulated step by step. Collisions with the totes or pushing hard on objects
 //! stop the arm, and IK failures end the attempt, each as a typed outcome rather than an error.
@@ -6,10 +6,10 @@
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use rapier3d::math::{Pose, Rotation, Vector};
 
-use super::robot::gripper_geometry::TCP_OFFSET;
 use super::{in_contact, ObjectLocation, Workcell, PHYSICS_HZ};
+use crate::grasp::gripper::GRIPPER;
 use crate::grasp::WorldGrasp;
-use crate::kinematics::{
+use crate::sim::kinematics::{
     IkError, JointTrajectory, Joints, TrapezoidProfile, Ur5, HOME_JOINTS, PLACE_JOINTS,
 };
 
@@ -37,6 +37,19 @@ pub const ENVIRONMENT_PENETRATION: f32 = 0.002;
 pub const OBJECT_PRESSED_DEPTH: f32 = 0.005;
 /// Below this opening the fingers count as fully closed (m).
 pub const CLOSED_OPENING: f32 = 0.004;
+/// Longest wait for the fingers to open (s).
+const OPEN_WAIT: f32 = 0.6;
+/// Longest wait for the fingers to close on an object (s).
+const CLOSE_WAIT: f32 = 1.0;
+/// How long the open hand stays over bin 2 so the object falls clear (s).
+const RELEASE_WAIT: f32 = 0.5;
+/// Longest wait for the objects to come to rest after an attempt (s).
+const AFTER_ATTEMPT_SETTLE: f32 = 2.0;
+/// After a failure the hand backs up to at least this TCP height (m), then
+/// [`RECOVER_BACKOFF`] higher, before going home.
+const RECOVER_TCP_HEIGHT: f32 = 0.25;
+/// See [`RECOVER_TCP_HEIGHT`] (m).
+const RECOVER_BACKOFF: f32 = 0.1;
 /// Distance within which a pad counts as touching an object (m).
 const TOUCH_GAP: f32 = 0.002;
 
@@ -103,8 +116,35 @@ impl PickOutcome {
     }
 }
 
+/// What stopped the arm: the protective stops of a real UR5 and the gripper's guard.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CollisionStop {
+    /// An arm link or the palm entered a tote or the ground.
+    #[error("the arm hit the bin or the ground")]
+    ArmHitEnvironment,
+    /// A finger entered a tote or the ground.
+    #[error("a finger hit the bin or the ground")]
+    FingerHitEnvironment,
+    /// A light object touched by the gripper sank deeper into the tote.
+    #[error("the gripper pressed {object} into the tote")]
+    PressedIntoTote {
+        /// The object's name.
+        object: String,
+    },
+    /// A part pushed on an object harder than the protective-stop force.
+    #[error("the {part} pressed on {object} with {force:.0} N")]
+    Pressed {
+        /// "arm", "palm" or "finger".
+        part: &'static str,
+        /// The object's name.
+        object: String,
+        /// The contact force (N).
+        force: f32,
+    },
+}
+
 enum Stop {
-    Collision(String),
+    Collision(CollisionStop),
     Ik(IkError),
 }
 
@@ -132,7 +172,7 @@ impl Workcell {
             let y = closing;
             let x = y.cross(z);
             let rotation = Rotation::from_mat3(&rapier3d::glamx::Mat3::from_cols(x, y, z));
-            Pose::from_parts(tcp + Vector::new(0.0, 0.0, TCP_OFFSET), rotation)
+            Pose::from_parts(tcp + Vector::new(0.0, 0.0, GRIPPER.tcp_offset), rotation)
         };
         let above = grasp.tcp + Vector::new(0.0, 0.0, APPROACH_HEIGHT);
         // The jaw is symmetric: take whichever of ±closing needs less wrist travel.
@@ -161,7 +201,7 @@ impl Workcell {
             .collect();
         let guard = Guard { objects: true };
         self.gripper.open(&mut self.world);
-        self.wait_for_fingers(0.6);
+        self.wait_for_fingers(OPEN_WAIT);
         self.trace("opened");
         if let Err(stop) = self.move_joints(approach_q, guard) {
             return self.abort(stop);
@@ -173,7 +213,7 @@ impl Workcell {
         tracing::debug!(?closing, "intended closing direction");
         self.trace("descended");
         self.gripper.close(&mut self.world);
-        self.wait_for_fingers(1.0);
+        self.wait_for_fingers(CLOSE_WAIT);
         self.gripper.hold(&mut self.world);
         self.trace("closed");
         let carry = Guard { objects: false };
@@ -202,10 +242,10 @@ impl Workcell {
         let _ = self.move_joints(PLACE_JOINTS, carry);
         let at_place = self.object_pose(held).translation;
         self.gripper.open(&mut self.world);
-        self.wait_for_fingers(0.6);
-        self.hold_for(0.5);
+        self.wait_for_fingers(OPEN_WAIT);
+        self.hold_for(RELEASE_WAIT);
         self.recover_home();
-        self.settle(2.0);
+        self.settle(AFTER_ATTEMPT_SETTLE);
         // Where the object was when the hand reached the place pose tells a drop on the way
         // (on the floor already) from a bounce out of bin 2.
         tracing::debug!(object = %self.objects[held].model.name, ?at_place, location = ?self.locate(held), "placed");
@@ -290,7 +330,7 @@ impl Workcell {
 
     fn abort(&mut self, stop: Stop) -> PickOutcome {
         let (reason, detail) = match stop {
-            Stop::Collision(what) => (PickReason::Collision, what),
+            Stop::Collision(what) => (PickReason::Collision, what.to_string()),
             Stop::Ik(e) => (PickReason::IkUnreachable, e.to_string()),
         };
         self.recover();
@@ -300,13 +340,17 @@ impl Workcell {
     /// After a failed attempt: open, back straight up, and return home, without collision stops.
     fn recover(&mut self) {
         self.gripper.open(&mut self.world);
-        self.wait_for_fingers(0.6);
+        self.wait_for_fingers(OPEN_WAIT);
         let ur5 = Ur5::new(to_isometry(&Pose::from_translation(super::ROBOT_BASE)));
         let mut up = self.tool0_pose();
-        up.translation.z = up.translation.z.max(0.25 + TCP_OFFSET) + 0.1;
+        up.translation.z = up
+            .translation
+            .z
+            .max(RECOVER_TCP_HEIGHT + GRIPPER.tcp_offset)
+            + RECOVER_BACKOFF;
         let _ = self.move_line_unchecked(&ur5, up);
         self.recover_home();
-        self.settle(2.0);
+        self.settle(AFTER_ATTEMPT_SETTLE);
     }
 
     fn recover_home(&mut self) {
@@ -458,7 +502,7 @@ impl Workcell {
     }
 
     /// The first guarded contact, described, if any.
-    fn collision(&self, guard: Guard, sunk_before: &[f32]) -> Option<String> {
+    fn collision(&self, guard: Guard, sunk_before: &[f32]) -> Option<CollisionStop> {
         for &c in self
             .arm
             .colliders
@@ -466,12 +510,12 @@ impl Workcell {
             .chain([&self.gripper.palm_collider])
         {
             if self.touches_environment(c, ENVIRONMENT_PENETRATION) {
-                return Some("the arm hit the bin or the ground".into());
+                return Some(CollisionStop::ArmHitEnvironment);
             }
         }
         for &c in self.gripper.finger_colliders.iter().flatten() {
             if self.touches_environment(c, ENVIRONMENT_PENETRATION) {
-                return Some("a finger hit the bin or the ground".into());
+                return Some(CollisionStop::FingerHitEnvironment);
             }
         }
         if guard.objects {
@@ -490,10 +534,9 @@ impl Workcell {
                         .any(|&part| in_contact(&self.world, part, object.collider, TOUCH_GAP))
                 {
                     tracing::debug!(object = %object.model.name, sunk, before, tool0 = ?self.tool0_pose().translation, "pressed into the tote");
-                    return Some(format!(
-                        "the gripper pressed {} into the tote",
-                        object.model.name
-                    ));
+                    return Some(CollisionStop::PressedIntoTote {
+                        object: object.model.name.clone(),
+                    });
                 }
             }
             let parts = self
@@ -519,10 +562,11 @@ impl Workcell {
                             object = ?self.world.bodies[object.body].translation(),
                             "pressed"
                         );
-                        return Some(format!(
-                            "the {part} pressed on {} with {force:.0} N",
-                            object.model.name
-                        ));
+                        return Some(CollisionStop::Pressed {
+                            part,
+                            object: object.model.name.clone(),
+                            force,
+                        });
                     }
                 }
             }
@@ -553,7 +597,6 @@ pub(crate) fn to_isometry(pose: &Pose) -> Isometry3<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::robot::gripper_geometry::PAD_HEIGHT;
     use super::super::robot::groups;
     use super::super::WorkcellConfig;
     use super::*;
@@ -562,14 +605,17 @@ mod tests {
     /// How far a 50 g cube held in the closed jaw moves along the closing line, relative to
     /// the hand, under a steady 5 N push along that line.
     fn slide_under_push(hold: bool) -> f32 {
-        let assets = std::path::Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/assets"));
-        let mut cell = Workcell::new(assets, &WorkcellConfig::default()).unwrap();
+        let mut cell = Workcell::new(&WorkcellConfig::default()).unwrap();
         cell.set_robot_collisions(true);
         // Only the push acts along the closing line; without gravity the cube waits for the jaw.
         cell.world.gravity = Vector::ZERO;
         let tool0 = cell.tool0_pose();
-        let centre =
-            tool0 * Pose::from_translation(Vector::new(0.0, 0.0, TCP_OFFSET - PAD_HEIGHT / 2.0));
+        let centre = tool0
+            * Pose::from_translation(Vector::new(
+                0.0,
+                0.0,
+                GRIPPER.tcp_offset - GRIPPER.pad_height / 2.0,
+            ));
         let cube = cell
             .world
             .insert_body(RigidBodyBuilder::dynamic().pose(centre));

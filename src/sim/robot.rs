@@ -12,8 +12,9 @@ use rapier3d::math::{Pose, Rotation, Vector};
 use rapier3d::prelude::*;
 use rapier3d_urdf::{UrdfLoaderOptions, UrdfRobot};
 
-use crate::kinematics::Joints;
-use crate::urdf::{rpy_rotation, UrdfFile, Visual};
+use crate::assets::urdf::{rpy_rotation, UrdfFile, Visual};
+use crate::grasp::gripper::GRIPPER;
+use crate::sim::kinematics::Joints;
 
 /// Collision groups: which families of colliders may touch.
 pub(crate) mod groups {
@@ -57,28 +58,10 @@ pub(crate) mod groups {
     }
 }
 
-/// Gripper dimensions (Robotiq 2F-85 size) in the tool0 frame, whose z axis points out of the flange.
-pub mod gripper_geometry {
-    /// Maximum distance between the pads' inner faces (m).
-    pub const MAX_OPENING: f32 = 0.085;
-    /// Distance from tool0 to the TCP along the tool axis (m).
-    pub const TCP_OFFSET: f32 = 0.15;
-    /// Pad width across the closing direction (m).
-    pub const PAD_WIDTH: f32 = 0.022;
-    /// Pad height along the tool axis (m).
-    pub const PAD_HEIGHT: f32 = 0.035;
-    /// Pad thickness along the closing direction (m).
-    pub const PAD_THICKNESS: f32 = 0.010;
-    /// Palm (coupling + body) length below tool0 (m).
-    pub const PALM_LENGTH: f32 = 0.060;
-    /// Palm half extents across (x) and along (y) the closing direction (m).
-    pub const PALM_HALF_X: f32 = 0.035;
-    pub const PALM_HALF_Y: f32 = 0.062;
-    /// How far the upper finger link sits back from the pad's inner face (m).
-    pub const LINK_SETBACK: f32 = 0.006;
-    /// Each finger's mass (kg); lighter fingers made the joint solve unstable.
-    pub const FINGER_MASS: f32 = 0.3;
-}
+/// How far the upper finger link sits back from the pad's inner face (m).
+const LINK_SETBACK: f32 = 0.006;
+/// Each finger's mass (kg); lighter fingers made the joint solve unstable.
+const FINGER_MASS: f32 = 0.3;
 
 /// One link of the URDF chain, in topological order.
 #[derive(Debug, Clone)]
@@ -113,16 +96,18 @@ pub const JOINT_NAMES: [&str; 6] = [
 
 impl Arm {
     /// Loads the URDF: rapier3d-urdf builds the colliders, urdf-rs gives the chain and visuals.
-    pub fn load(world: &mut PhysicsWorld, urdf_path: &Path, base: Pose) -> anyhow::Result<Self> {
-        let file = UrdfFile::read(urdf_path)?;
+    pub fn load(world: &mut PhysicsWorld, urdf: &str, base: Pose) -> anyhow::Result<Self> {
+        let name = Path::new("bundled:ur5/ur5.urdf");
+        let file = UrdfFile::parse(urdf, name)?;
         let options = UrdfLoaderOptions {
             make_roots_fixed: true,
             apply_imported_mass_props: false,
             squeeze_empty_fixed_links: false,
             ..Default::default()
         };
-        let (urdf_robot, robot) = UrdfRobot::from_file(urdf_path, options, None)
-            .with_context(|| format!("loading robot {}", urdf_path.display()))?;
+        // The bundled URDF names no mesh files, so the mesh directory is never read.
+        let (urdf_robot, robot) = UrdfRobot::from_str(urdf, options, Path::new("."))
+            .with_context(|| format!("loading robot {}", name.display()))?;
 
         let links = &robot.links;
         let find_link = |name: &str| links.iter().position(|l| l.name == name);
@@ -206,9 +191,9 @@ impl Arm {
             chain,
             tool0,
             colliders,
-            joints: crate::kinematics::HOME_JOINTS,
+            joints: crate::sim::kinematics::HOME_JOINTS,
         };
-        arm.teleport(world, crate::kinematics::HOME_JOINTS);
+        arm.teleport(world, crate::sim::kinematics::HOME_JOINTS);
         Ok(arm)
     }
 
@@ -290,15 +275,18 @@ const FINGER_DAMPING: f32 = 1.0e8;
 impl Gripper {
     /// Builds the gripper open at `tool0`, with `force` newtons per finger.
     pub fn new(world: &mut PhysicsWorld, tool0: Pose, force: f32, pad_friction: f32) -> Self {
-        use gripper_geometry::*;
         let palm = world.insert_body(RigidBodyBuilder::kinematic_position_based().pose(tool0));
         let palm_collider = world.insert_collider(
-            ColliderBuilder::cuboid(PALM_HALF_X, PALM_HALF_Y, PALM_LENGTH / 2.0)
-                .translation(Vector::new(0.0, 0.0, PALM_LENGTH / 2.0))
-                .collision_groups(groups::arm())
-                .active_collision_types(
-                    ActiveCollisionTypes::default() | ActiveCollisionTypes::KINEMATIC_FIXED,
-                ),
+            ColliderBuilder::cuboid(
+                GRIPPER.palm_half_across,
+                GRIPPER.palm_half_along,
+                GRIPPER.palm_length / 2.0,
+            )
+            .translation(Vector::new(0.0, 0.0, GRIPPER.palm_length / 2.0))
+            .collision_groups(groups::arm())
+            .active_collision_types(
+                ActiveCollisionTypes::default() | ActiveCollisionTypes::KINEMATIC_FIXED,
+            ),
             Some(palm),
         );
         let mut fingers = Vec::new();
@@ -308,7 +296,7 @@ impl Gripper {
         for side in [1.0f32, -1.0] {
             // Finger frame: origin on the pad's inner face, on the closing axis; the finger
             // extends outward (away from the other finger) along `side`·y.
-            let half_open = MAX_OPENING / 2.0;
+            let half_open = GRIPPER.max_opening / 2.0;
             let finger = world.insert_body(
                 RigidBodyBuilder::dynamic()
                     .pose(tool0 * Pose::from_translation(Vector::new(0.0, side * half_open, 0.0)))
@@ -317,36 +305,44 @@ impl Gripper {
                     .can_sleep(false),
             );
             let pad = world.insert_collider(
-                ColliderBuilder::cuboid(PAD_WIDTH / 2.0, PAD_THICKNESS / 2.0, PAD_HEIGHT / 2.0)
-                    .translation(Vector::new(
-                        0.0,
-                        side * PAD_THICKNESS / 2.0,
-                        TCP_OFFSET - PAD_HEIGHT / 2.0,
-                    ))
-                    .mass(FINGER_MASS / 2.0)
-                    .friction(pad_friction)
-                    .friction_combine_rule(CoefficientCombineRule::Multiply)
-                    .collision_groups(groups::finger()),
+                ColliderBuilder::cuboid(
+                    GRIPPER.pad_width / 2.0,
+                    GRIPPER.pad_thickness / 2.0,
+                    GRIPPER.pad_height / 2.0,
+                )
+                .translation(Vector::new(
+                    0.0,
+                    side * GRIPPER.pad_thickness / 2.0,
+                    GRIPPER.tcp_offset - GRIPPER.pad_height / 2.0,
+                ))
+                .mass(FINGER_MASS / 2.0)
+                .friction(pad_friction)
+                .friction_combine_rule(CoefficientCombineRule::Multiply)
+                .collision_groups(groups::finger()),
                 Some(finger),
             );
-            let link_length = TCP_OFFSET - PAD_HEIGHT - PALM_LENGTH;
+            let link_length = GRIPPER.tcp_offset - GRIPPER.pad_height - GRIPPER.palm_length;
             let link = world.insert_collider(
-                ColliderBuilder::cuboid(PAD_WIDTH / 2.0, PAD_THICKNESS / 2.0, link_length / 2.0)
-                    .translation(Vector::new(
-                        0.0,
-                        side * (LINK_SETBACK + PAD_THICKNESS / 2.0),
-                        PALM_LENGTH + link_length / 2.0,
-                    ))
-                    .mass(FINGER_MASS / 2.0)
-                    .friction(pad_friction)
-                    .friction_combine_rule(CoefficientCombineRule::Multiply)
-                    .collision_groups(groups::finger()),
+                ColliderBuilder::cuboid(
+                    GRIPPER.pad_width / 2.0,
+                    GRIPPER.pad_thickness / 2.0,
+                    link_length / 2.0,
+                )
+                .translation(Vector::new(
+                    0.0,
+                    side * (LINK_SETBACK + GRIPPER.pad_thickness / 2.0),
+                    GRIPPER.palm_length + link_length / 2.0,
+                ))
+                .mass(FINGER_MASS / 2.0)
+                .friction(pad_friction)
+                .friction_combine_rule(CoefficientCombineRule::Multiply)
+                .collision_groups(groups::finger()),
                 Some(finger),
             );
             // Anchored at the pads: with the anchor up at the palm, the long lever arm to the
             // pad let rapier's joint solve absorb the motor force (1 N reached the object
             // instead of 40 N).
-            let anchor = Vector::new(0.0, 0.0, TCP_OFFSET - PAD_HEIGHT / 2.0);
+            let anchor = Vector::new(0.0, 0.0, GRIPPER.tcp_offset - GRIPPER.pad_height / 2.0);
             let joint = PrismaticJointBuilder::new(Vector::Y * side)
                 .local_anchor1(anchor)
                 .local_anchor2(anchor)
@@ -395,7 +391,7 @@ impl Gripper {
     pub fn hold(&self, world: &mut PhysicsWorld) {
         let stiffness = self.force / HOLD_SQUEEZE;
         // Critically damped for the finger's own mass.
-        let damping = 2.0 * (stiffness * gripper_geometry::FINGER_MASS).sqrt();
+        let damping = 2.0 * (stiffness * FINGER_MASS).sqrt();
         for (finger, handle) in self.fingers.iter().zip(self.joints) {
             let target = (self.finger_offset(world, *finger) - HOLD_SQUEEZE).max(0.0);
             if let Some(joint) = world.impulse_joints.get_mut(handle, true) {

@@ -1,0 +1,53 @@
+//! Model files: the bundled robot and objects (embedded in the binary), the URDF boundary and
+//! the object catalogue.
+//!
+//! The one place that reads urdf-rs, Bullet's `<contact>` tag and mesh files, and converts
+//! them into the crate's own types. It may use the pure core only. The bundled models are
+//! compiled in, so an installed binary runs from any directory; `--objects-dir` points the
+//! catalogue at a directory on disk instead.
+
+pub mod objects;
+pub mod urdf;
+
+use include_dir::{include_dir, Dir};
+
+/// The repository's assets/ folder, compiled in.
+static BUNDLED: Dir<'static> = include_dir!("$CARGO_MANIFEST_DIR/assets");
+
+/// How bundled files are named in messages and reports: they have no path on disk.
+pub const BUNDLED_PREFIX: &str = "bundled:";
+
+/// A bundled text file by its path under assets/, e.g. `ur5/ur5.urdf`.
+pub(crate) fn bundled_text(path: &str) -> Option<&'static str> {
+    BUNDLED.get_file(path)?.contents_utf8()
+}
+
+/// The folder names directly under a bundled folder, sorted.
+pub(crate) fn bundled_folders(path: &str) -> Vec<String> {
+    let Some(dir) = BUNDLED.get_dir(path) else {
+        return Vec::new();
+    };
+    let mut names: Vec<String> = dir
+        .dirs()
+        .filter_map(|d| d.path().file_name()?.to_str().map(str::to_owned))
+        .collect();
+    names.sort();
+    names
+}
+
+/// The UR5's URDF (compiled in; it names no mesh files).
+pub const UR5_URDF: &str = include_str!("../../assets/ur5/ur5.urdf");
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_robot_and_all_fifteen_objects_are_compiled_in() {
+        assert!(UR5_URDF.contains("tool0"));
+        let objects = bundled_folders("objects");
+        assert_eq!(objects.len(), 15, "{objects:?}");
+        assert!(bundled_text("objects/split.json").is_some());
+        assert!(bundled_text("objects/YcbHammer/model.urdf").is_some());
+    }
+}

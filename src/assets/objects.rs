@@ -1,0 +1,243 @@
+//! Object models and the train/test split: bundled primitive compounds or imported mesh URDFs, resolved by name.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::assets::urdf::{Collision, UrdfError, UrdfFile, Visual};
+
+/// Friction used when a URDF has no Bullet `<contact>` tag (Bullet's own default).
+pub const DEFAULT_FRICTION: f32 = 0.5;
+
+/// A graspable object: one rigid body with compound collision geometry.
+#[derive(Debug, Clone)]
+pub struct ObjectModel {
+    /// Name (the directory name, e.g. `YcbMustardBottle`).
+    pub name: String,
+    /// Mass in kg.
+    pub mass: f32,
+    /// Lateral friction coefficient μ (combined with the pads' 1.0 by multiplication).
+    pub friction: f32,
+    /// Collision pieces in the object frame.
+    pub collisions: Vec<Collision>,
+    /// Drawable pieces in the object frame.
+    pub visuals: Vec<Visual>,
+}
+
+/// Failures finding or reading object models and split files.
+#[derive(Debug, thiserror::Error)]
+pub enum ObjectError {
+    /// No `<dir>/<name>/model.urdf`.
+    #[error("unknown object '{name}': no {path}; known objects: {known}")]
+    Unknown {
+        name: String,
+        path: PathBuf,
+        known: String,
+    },
+    /// The object's URDF is broken.
+    #[error(transparent)]
+    Urdf(#[from] UrdfError),
+    /// The URDF has no usable link.
+    #[error("{path}: {message}")]
+    Invalid { path: PathBuf, message: String },
+    /// The split file cannot be read or parsed.
+    #[error("split file {path}: {message} (expected {{\"train\": [..], \"test\": [..]}})")]
+    Split { path: PathBuf, message: String },
+}
+
+/// The bundled objects' folder under assets/.
+const BUNDLED_OBJECTS: &str = "objects";
+
+/// A catalogue of `<Name>/model.urdf` object models: the bundled one, or a directory on disk.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct ObjectLibrary {
+    /// `None` for the bundled models.
+    dir: Option<PathBuf>,
+}
+
+impl ObjectLibrary {
+    /// The fifteen bundled YCB-like models.
+    pub fn bundled() -> Self {
+        Self { dir: None }
+    }
+
+    /// A library rooted at `dir`.
+    pub fn new(dir: impl Into<PathBuf>) -> Self {
+        Self {
+            dir: Some(dir.into()),
+        }
+    }
+
+    /// Where the models come from, for messages and reports: the directory, or
+    /// `bundled:objects`.
+    pub fn location(&self) -> PathBuf {
+        self.dir
+            .clone()
+            .unwrap_or_else(|| PathBuf::from(format!("{}{BUNDLED_OBJECTS}", super::BUNDLED_PREFIX)))
+    }
+
+    /// The split that comes with the library: `split.json` at its root.
+    pub fn default_split(&self) -> SplitFile {
+        match &self.dir {
+            Some(dir) => SplitFile::Path(dir.join("split.json")),
+            None => SplitFile::Bundled,
+        }
+    }
+
+    /// Names of all objects with a model.urdf, sorted.
+    pub fn names(&self) -> Vec<String> {
+        let Some(dir) = &self.dir else {
+            return super::bundled_folders(BUNDLED_OBJECTS);
+        };
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .into_iter()
+            .flatten()
+            .flatten()
+            .filter(|e| e.path().join("model.urdf").is_file())
+            .filter_map(|e| e.file_name().to_str().map(str::to_owned))
+            .collect();
+        names.sort();
+        names
+    }
+
+    /// Loads one object by name.
+    pub fn load(&self, name: &str) -> Result<ObjectModel, ObjectError> {
+        let path = self.location().join(name).join("model.urdf");
+        let unknown = || ObjectError::Unknown {
+            name: name.to_owned(),
+            path: path.clone(),
+            known: self.names().join(", "),
+        };
+        if name.is_empty() || name.contains(['/', '\\']) {
+            return Err(unknown());
+        }
+        let file = match &self.dir {
+            Some(_) if !path.is_file() => return Err(unknown()),
+            Some(_) => UrdfFile::read(&path)?,
+            None => {
+                let text = super::bundled_text(&format!("{BUNDLED_OBJECTS}/{name}/model.urdf"))
+                    .ok_or_else(unknown)?;
+                UrdfFile::parse(text, &path)?
+            }
+        };
+        object_from_urdf(name, &file)
+    }
+
+    /// Loads several objects, failing on the first bad one.
+    pub fn load_all(&self, names: &[String]) -> Result<Vec<ObjectModel>, ObjectError> {
+        names.iter().map(|n| self.load(n)).collect()
+    }
+}
+
+/// Builds an object from a parsed URDF: every link's geometry is merged into one rigid body.
+pub fn object_from_urdf(name: &str, file: &UrdfFile) -> Result<ObjectModel, ObjectError> {
+    let invalid = |message: &str| ObjectError::Invalid {
+        path: file.path.clone(),
+        message: message.to_owned(),
+    };
+    let mut model = ObjectModel {
+        name: name.to_owned(),
+        mass: 0.0,
+        friction: DEFAULT_FRICTION,
+        collisions: Vec::new(),
+        visuals: Vec::new(),
+    };
+    let mut friction = None;
+    for index in 0..file.robot.links.len() {
+        let link = file.link_geometry(index)?;
+        model.mass += link.mass.unwrap_or(0.0);
+        friction = friction.or(link.lateral_friction);
+        model.collisions.extend(link.collisions);
+        model.visuals.extend(link.visuals);
+    }
+    if file.robot.links.len() > 1 && !file.robot.joints.is_empty() {
+        return Err(invalid(
+            "objects must be a single link (articulated objects are not supported)",
+        ));
+    }
+    if model.collisions.is_empty() {
+        return Err(invalid("the object has no <collision> geometry"));
+    }
+    if model.mass <= 0.0 {
+        return Err(invalid("the object needs a positive <inertial><mass>"));
+    }
+    model.friction = friction.unwrap_or(DEFAULT_FRICTION);
+    Ok(model)
+}
+
+/// Which objects are for training and which for testing.
+#[derive(Debug, Clone, PartialEq, Eq, Deserialize, serde::Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct Split {
+    /// Objects seen in labelling and training.
+    pub train: Vec<String>,
+    /// Held-out objects.
+    pub test: Vec<String>,
+}
+
+/// Where the split comes from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum SplitFile {
+    /// The bundled objects' split.
+    Bundled,
+    /// A JSON file on disk.
+    Path(PathBuf),
+}
+
+impl SplitFile {
+    /// The file's path, or `bundled:objects/split.json`, for messages and reports.
+    pub fn location(&self) -> PathBuf {
+        match self {
+            SplitFile::Path(path) => path.clone(),
+            SplitFile::Bundled => PathBuf::from(format!(
+                "{}{BUNDLED_OBJECTS}/split.json",
+                super::BUNDLED_PREFIX
+            )),
+        }
+    }
+
+    /// Reads and checks the split.
+    pub fn read(&self) -> Result<Split, ObjectError> {
+        match self {
+            SplitFile::Path(path) => Split::read(path),
+            SplitFile::Bundled => {
+                let path = self.location();
+                let text = super::bundled_text(&format!("{BUNDLED_OBJECTS}/split.json"))
+                    .ok_or_else(|| ObjectError::Split {
+                        path: path.clone(),
+                        message: "missing from the build".into(),
+                    })?;
+                Split::parse(text, &path)
+            }
+        }
+    }
+}
+
+impl Split {
+    /// Reads a split JSON file.
+    pub fn read(path: &Path) -> Result<Self, ObjectError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ObjectError::Split {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parses split JSON; `path` names it in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<Self, ObjectError> {
+        let err = |message: String| ObjectError::Split {
+            path: path.to_owned(),
+            message,
+        };
+        let split: Split = serde_json::from_str(text).map_err(|e| err(e.to_string()))?;
+        if split.train.is_empty() {
+            return Err(err("the train list is empty".into()));
+        }
+        Ok(split)
+    }
+
+    /// Every object, train first.
+    pub fn all(&self) -> Vec<String> {
+        self.train.iter().chain(&self.test).cloned().collect()
+    }
+}

@@ -1,0 +1,538 @@
+//! Command-line flags (clap derive). Flags stop here: each command gets a validated config struct.
+
+mod resolve;
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context as _};
+use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
+use clap::{Args, Parser, Subcommand};
+
+use crate::commands;
+use crate::commands::bench::{BenchConfig, PeerPython};
+use crate::commands::eval::{PolicyKind, Task};
+use crate::commands::scene::SceneConfig;
+use crate::grasp::PixelGrasp;
+use crate::model::unet::Precision;
+use crate::named::Named;
+use crate::policy::collision::CollisionCheck;
+
+/// Teach a simulated UR5 to pick up objects it has never seen, from a few dozen labelled grasps.
+#[derive(Debug, Parser)]
+#[command(name = "graspmap", version, about)]
+pub struct Cli {
+    #[command(flatten)]
+    pub global: GlobalArgs,
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+/// Flags every command takes.
+#[derive(Debug, Args, Clone)]
+pub struct GlobalArgs {
+    /// Data directory: labels in DIR/labels, model and evaluations in DIR/affordance.
+    #[arg(long, global = true, default_value = "data", value_name = "DIR")]
+    pub data: PathBuf,
+    /// Directory of object models, each <Name>/model.urdf [default: the 15 bundled models].
+    #[arg(long = "objects-dir", global = true, value_name = "DIR")]
+    pub objects_dir: Option<PathBuf>,
+    /// Train/test split JSON {"train": [..], "test": [..]} [default: <objects-dir>/split.json].
+    #[arg(long, global = true, value_name = "FILE")]
+    pub split: Option<PathBuf>,
+    /// Worker threads for CPU-heavy work [default: all cores].
+    #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
+    pub threads: Option<u16>,
+    /// Also write the results as JSON to PATH ('-' = stdout).
+    #[arg(long, global = true, value_name = "PATH")]
+    pub json: Option<PathBuf>,
+    /// Print only results and errors, no progress.
+    #[arg(long, short, global = true)]
+    pub quiet: bool,
+}
+
+/// The subcommands.
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Drop objects into bin 1 and save the top-down camera image.
+    Scene(SceneArgs),
+    /// Drop one object and run one simulated pick attempt.
+    Grasp(GraspArgs),
+    /// Collect verified grasp labels for the training objects.
+    Label(LabelArgs),
+    /// Train the affordance model on the labels.
+    Train(TrainArgs),
+    /// Let a policy pick objects in simulation and report how it did.
+    Eval(EvalArgs),
+    /// Run the trained model on a 128 × 128 RGB image and print its best grasp.
+    Predict(PredictArgs),
+    /// Measure speed against the Python PyTorch peer.
+    #[command(subcommand)]
+    Bench(BenchCommand),
+}
+
+/// What `graspmap bench` measures.
+#[derive(Debug, Subcommand)]
+pub enum BenchCommand {
+    /// Training-step throughput and 8-rotation inference latency, Rust and Python alternating.
+    Train(BenchTrainArgs),
+}
+
+/// `graspmap bench train`.
+#[derive(Debug, Args)]
+pub struct BenchTrainArgs {
+    /// Timed steps per block and side (after 3 warm-up steps).
+    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..))]
+    pub steps: u32,
+    /// Blocks per side, alternating Rust and Python.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..))]
+    pub rounds: u32,
+    /// Precision of both sides.
+    #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
+    pub precision: PrecisionChoice,
+    /// Time only the Rust side (no Python environment needed).
+    #[arg(long, conflicts_with = "python")]
+    pub no_peer: bool,
+    /// The peer's Python, with torch 2.13 [default: ./.venv-bench/bin/python, installed by
+    /// scripts/setup-bench-peer.sh when run from a checkout].
+    #[arg(long, value_name = "PATH")]
+    pub python: Option<PathBuf>,
+}
+
+/// `graspmap train`.
+#[derive(Debug, Args)]
+pub struct TrainArgs {
+    /// Epochs to train (30 is usually enough).
+    #[arg(long, default_value_t = 101, value_parser = clap::value_parser!(u32).range(1..))]
+    pub epochs: u32,
+    /// Images per optimiser step.
+    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..))]
+    pub batch_size: u32,
+    /// Initial Adam learning rate.
+    #[arg(long, default_value_t = 1e-3, value_parser = positive::<f64>)]
+    pub lr: f64,
+    /// Seed of the 90/10 split, initial weights, data order and augmentation.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Continue from DATA/affordance/last.* exactly where it stopped.
+    #[arg(long)]
+    pub resume: bool,
+    /// Arithmetic of training.
+    #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
+    pub precision: PrecisionChoice,
+}
+
+/// `--precision` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum PrecisionChoice {
+    /// bf16 where the CPU has native bf16 instructions, else fp32.
+    Auto,
+    /// float32 throughout.
+    Fp32,
+    /// bf16 convolutions (channels_last) over float32 master weights.
+    Bf16,
+}
+
+impl PrecisionChoice {
+    /// The precision to use on this machine.
+    pub fn resolve(self) -> Precision {
+        match self {
+            PrecisionChoice::Auto => Precision::fastest_supported(),
+            PrecisionChoice::Fp32 => Precision::Fp32,
+            PrecisionChoice::Bf16 => Precision::Bf16,
+        }
+    }
+}
+
+/// A value parser for a [`Named`] enum: its names, with their help, and nothing else.
+fn named<T: Named>() -> impl TypedValueParser<Value = T> {
+    PossibleValuesParser::new(
+        T::ALL
+            .iter()
+            .map(|v| PossibleValue::new(v.name()).help(v.help())),
+    )
+    .map(|name| {
+        T::ALL
+            .iter()
+            .copied()
+            .find(|v| v.name() == name)
+            .unwrap_or(T::ALL[0])
+    })
+}
+
+/// `graspmap eval`.
+#[derive(Debug, Args)]
+pub struct EvalArgs {
+    /// Which evaluation to run.
+    #[arg(long, value_parser = named::<Task>())]
+    pub task: Task,
+    /// Who chooses the grasps.
+    #[arg(long, value_parser = named::<PolicyKind>(), default_value = "model")]
+    pub policy: PolicyKind,
+    /// Model weights [default: DATA/affordance/best.safetensors].
+    #[arg(long, value_name = "PATH")]
+    pub checkpoint: Option<PathBuf>,
+    /// Base seed: train/test attempt a of object i drops with seed + 100·i + a + 10000;
+    /// empty_bin drops all objects with it [default: 0, empty_bin 2].
+    #[arg(long, conflicts_with = "seeds")]
+    pub seed: Option<u64>,
+    /// Several base seeds, aggregated: a list and/or ranges, e.g. 1-10 or 0,1000,2000.
+    #[arg(long, value_name = "LIST", value_parser = parse_seed_list)]
+    pub seeds: Option<SeedList>,
+    /// Failure suppression: lower the affordance around the last N failed actions (0 = off).
+    #[arg(
+        long = "n_past_action",
+        visible_alias = "n-past-action",
+        value_name = "N",
+        default_value_t = 0
+    )]
+    pub n_past_action: usize,
+    /// Suppression: standard deviation of the subtracted Gaussian in pixels.
+    #[arg(long, value_name = "PX", default_value_t = 4.0, value_parser = positive::<f32>)]
+    pub suppression_sigma: f32,
+    /// Suppression: also lower the rotations within this many 22.5° bins of the failed one
+    /// (0 = its own rotation only, 4 = all).
+    #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=4))]
+    pub suppress_rotation_reach: u8,
+    /// Suppression: remember successful actions too, not only failures.
+    #[arg(long)]
+    pub suppress_successes: bool,
+    /// Model policy: before the argmax, zero the grasps whose open gripper would hit a tote wall
+    /// (walls) or also land on a surface seen in the depth image (full); off = plain argmax.
+    #[arg(long, value_parser = named::<CollisionCheck>(), default_value = "full")]
+    pub collision_check: CollisionCheck,
+    /// Model policy: execute the first of the N best actions (after suppression and the
+    /// collision check) that passes the planner's depth test: the object fits the open jaw with
+    /// room to spare, both pads come down in free space and seen, and they close on flat faces
+    /// across the object, not on an edge; the argmax when none passes (0 = plain argmax).
+    #[arg(long, value_name = "N", default_value_t = 200)]
+    pub verify_top: usize,
+    /// Model policy: move the chosen grasp to the middle of the surface under it, turning it to
+    /// an angle that fits there if needed (needs `--collision-check full`). Off by default: it
+    /// moves more objects in empty_bin but picks fewer training objects (BENCHMARKS.md).
+    #[arg(long)]
+    pub centring: bool,
+    /// empty_bin: most pick attempts per scene.
+    #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_attempts: u32,
+    /// Write the episode video: an oblique view beside the camera view with the chosen grasp
+    /// (one seed only).
+    #[arg(long, value_name = "GIF", conflicts_with = "seeds")]
+    pub record: Option<PathBuf>,
+    /// Arithmetic of the network.
+    #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
+    pub precision: PrecisionChoice,
+}
+
+/// `graspmap predict`.
+#[derive(Debug, Args)]
+pub struct PredictArgs {
+    /// A 128 × 128 RGB image (PNG or JPEG) seen from the top-down camera.
+    #[arg(long, value_name = "IMAGE")]
+    pub image: PathBuf,
+    /// Model weights [default: DATA/affordance/best.safetensors].
+    #[arg(long, value_name = "PATH")]
+    pub checkpoint: Option<PathBuf>,
+    /// Where to write the 512 × 512 visualisation [default: DATA/affordance/predict_vis/<image stem>.png].
+    #[arg(long, value_name = "PNG")]
+    pub out: Option<PathBuf>,
+    /// Arithmetic of the network.
+    #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
+    pub precision: PrecisionChoice,
+}
+
+/// Seeds given as a list and/or ranges.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SeedList(pub Vec<u64>);
+
+/// Parses `1-10`, `0,1000,2000` or a mix such as `1-3,7`.
+pub fn parse_seed_list(text: &str) -> Result<SeedList, String> {
+    let fail =
+        |why: &str| format!("'{text}' {why}; use a list and/or ranges such as 1-10 or 0,1000,2000");
+    let mut seeds = Vec::new();
+    for part in text.split(',').map(str::trim) {
+        let number = |s: &str| {
+            s.trim()
+                .parse::<u64>()
+                .map_err(|_| fail(&format!("has '{s}', not a seed")))
+        };
+        match part.split_once('-') {
+            Some((a, b)) => {
+                let (a, b) = (number(a)?, number(b)?);
+                if a > b {
+                    return Err(fail(&format!("has the empty range {a}-{b}")));
+                }
+                if b - a >= 100_000 {
+                    return Err(fail("spans more than 100000 seeds"));
+                }
+                seeds.extend(a..=b);
+            }
+            None => seeds.push(number(part)?),
+        }
+    }
+    let mut seen = std::collections::HashSet::new();
+    if let Some(d) = seeds.iter().find(|s| !seen.insert(**s)) {
+        return Err(fail(&format!("repeats seed {d}")));
+    }
+    Ok(SeedList(seeds))
+}
+
+fn positive<T: std::str::FromStr + PartialOrd + Default + Copy + Into<f64>>(
+    text: &str,
+) -> Result<T, String> {
+    match text.parse::<T>() {
+        Ok(v) if v > T::default() && v.into().is_finite() => Ok(v),
+        _ => Err(format!("'{text}' must be a positive number")),
+    }
+}
+
+/// `graspmap label`.
+#[derive(Debug, Args)]
+#[command(group = clap::ArgGroup::new("clicker").args(["clicks", "interactive"]))]
+pub struct LabelArgs {
+    /// Successful labels wanted per training object.
+    #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(1..))]
+    pub per_object: u32,
+    /// Rounds allowed per object before giving up on it (an error naming the object).
+    #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u32).range(1..))]
+    pub max_rounds: u32,
+    /// Base seed: round r of training object j drops with seed + 100·j + r.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Take clicks from a JSON list of {"object", "x", "y", "angle"}, in order, one per round.
+    #[arg(long, value_name = "FILE")]
+    pub clicks: Option<PathBuf>,
+    /// Click by hand: the image goes to --preview, commands come from stdin.
+    #[arg(long)]
+    pub interactive: bool,
+    /// Where --interactive writes the image with the cursor's grasp [default: DATA/labels/preview.png].
+    #[arg(long, value_name = "PNG", requires = "interactive")]
+    pub preview: Option<PathBuf>,
+    /// Scripted clicks: standard deviation of the click position noise in pixels.
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    pub click_noise_px: f32,
+    /// Scripted clicks: standard deviation of the angle noise in degrees (before snapping to 22.5°).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    pub angle_noise_deg: f32,
+    /// Delete existing labels and start over.
+    #[arg(long, conflicts_with = "check")]
+    pub force: bool,
+    /// Only validate the existing dataset; exit 2 if anything is wrong.
+    #[arg(long, conflicts_with_all = ["clicks", "interactive"])]
+    pub check: bool,
+}
+
+fn non_negative(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if v >= 0.0 && v.is_finite() => Ok(v),
+        _ => Err(format!("'{text}' must be a non-negative number")),
+    }
+}
+
+/// `graspmap scene`.
+#[derive(Debug, Args)]
+pub struct SceneArgs {
+    /// Comma-separated object names, dropped in this order.
+    #[arg(long, value_delimiter = ',', required = true, num_args = 1..)]
+    pub objects: Vec<String>,
+    /// Seed of the drop poses.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Output RGB image (.png).
+    #[arg(long, value_name = "PNG")]
+    pub out: PathBuf,
+    /// Also write the depth image as 16-bit PNG in millimetres.
+    #[arg(long, value_name = "PNG")]
+    pub depth: Option<PathBuf>,
+}
+
+/// `graspmap grasp`.
+#[derive(Debug, Args)]
+#[command(group = clap::ArgGroup::new("policy").required(true).args(["pixel", "oracle", "random"]))]
+pub struct GraspArgs {
+    /// Object to drop into bin 1.
+    #[arg(long)]
+    pub object: String,
+    /// Seed of the drop pose (and of --random's choice).
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Grasp centre as column,row in the 128 × 128 image (needs --angle).
+    #[arg(long, value_name = "U,V", requires = "angle")]
+    pub pixel: Option<String>,
+    /// Grasp angle in degrees, clockwise in the image; normalised mod 180.
+    #[arg(
+        long,
+        value_name = "DEG",
+        allow_negative_numbers = true,
+        requires = "pixel"
+    )]
+    pub angle: Option<f64>,
+    /// Let the oracle planner choose the grasp from ground-truth mask and depth.
+    #[arg(long)]
+    pub oracle: bool,
+    /// A uniformly random pixel on bin 1's floor area and a random angle.
+    #[arg(long)]
+    pub random: bool,
+    /// Write an animated GIF of the attempt from an oblique view.
+    #[arg(long, value_name = "GIF")]
+    pub record: Option<PathBuf>,
+    /// Grip force per finger in newtons.
+    #[arg(long, default_value_t = 40.0, value_parser = positive::<f32>)]
+    pub grip_force: f32,
+    /// Also save the camera image with the grasp drawn (.png).
+    #[arg(long, value_name = "PNG")]
+    pub image: Option<PathBuf>,
+}
+
+/// Parses a `U,V` pixel and checks that it lies in the 128 × 128 image.
+pub fn parse_pixel(text: &str) -> anyhow::Result<(u32, u32)> {
+    let parts: Vec<&str> = text.split(',').map(str::trim).collect();
+    let [u, v] = parts.as_slice() else {
+        bail!("--pixel '{text}' must be two integers U,V, e.g. --pixel 64,70");
+    };
+    let parse = |s: &str| {
+        s.parse::<u32>()
+            .with_context(|| format!("--pixel '{text}': '{s}' is not a non-negative integer"))
+    };
+    let (u, v) = (parse(u)?, parse(v)?);
+    let grasp = PixelGrasp::checked(f64::from(u), f64::from(v), 0.0).with_context(|| {
+        format!("--pixel {u},{v} is outside the 128 × 128 image (use 0..=127 for each)")
+    })?;
+    Ok((grasp.u, grasp.v))
+}
+
+/// Parses flags and runs the chosen command.
+pub fn run() -> anyhow::Result<()> {
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            use clap::error::ErrorKind;
+            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+                e.print()?;
+                return Ok(());
+            }
+            // clap's message names the flag and the fix over a few lines; fold it into one.
+            let text = e.to_string();
+            let message = text
+                .lines()
+                .take_while(|l| !l.trim().is_empty())
+                .map(str::trim)
+                .collect::<Vec<_>>()
+                .join(" ");
+            bail!(
+                "{} (see graspmap --help)",
+                message.trim_start_matches("error: ")
+            );
+        }
+    };
+    init_logging(cli.global.quiet);
+    let context = cli.global.context()?;
+    let data = context.data.clone();
+    match cli.command {
+        Command::Scene(args) => commands::scene::run(
+            &context,
+            SceneConfig {
+                objects: args.objects,
+                seed: args.seed,
+                out: args.out,
+                depth: args.depth,
+            },
+        ),
+        Command::Grasp(args) => commands::grasp::run(&context, args.config()?),
+        Command::Label(args) => commands::label::run(&context, args.config(&data)),
+        Command::Train(args) => commands::train::run(&context, args.options()),
+        Command::Eval(args) => commands::eval::run(&context, args.config(&data)?),
+        Command::Predict(args) => commands::predict::run(&context, args.config(&data)),
+        Command::Bench(BenchCommand::Train(args)) => commands::bench::run(
+            &context,
+            BenchConfig {
+                steps: args.steps,
+                rounds: args.rounds,
+                precision: args.precision.resolve(),
+                peer: match (args.no_peer, args.python) {
+                    (true, _) => None,
+                    (false, Some(path)) => Some(PeerPython::Given(path)),
+                    (false, None) => Some(PeerPython::Checkout),
+                },
+            },
+        ),
+    }
+}
+
+fn init_logging(quiet: bool) {
+    let default = if quiet { "warn" } else { "info" };
+    let filter = tracing_subscriber::EnvFilter::try_from_env("GRASPMAP_LOG")
+        .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default));
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(filter)
+        .with_writer(std::io::stderr)
+        .without_time()
+        .with_target(false)
+        .try_init();
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pixel_parsing_rejects_out_of_image_and_garbage() {
+        assert_eq!(parse_pixel("64,70").unwrap(), (64, 70));
+        assert_eq!(parse_pixel(" 0 , 127 ").unwrap(), (0, 127));
+        assert!(parse_pixel("128,3")
+            .unwrap_err()
+            .to_string()
+            .contains("outside"));
+        assert!(parse_pixel("-1,3")
+            .unwrap_err()
+            .to_string()
+            .contains("'-1'"));
+        assert!(parse_pixel("12")
+            .unwrap_err()
+            .to_string()
+            .contains("two integers"));
+    }
+
+    #[test]
+    fn seed_lists_take_ranges_and_lists_and_reject_nonsense() {
+        assert_eq!(parse_seed_list("1-4").unwrap().0, [1, 2, 3, 4]);
+        assert_eq!(parse_seed_list("0,1000,2000").unwrap().0, [0, 1000, 2000]);
+        assert_eq!(parse_seed_list("1-3, 7").unwrap().0, [1, 2, 3, 7]);
+        assert!(parse_seed_list("5-2").unwrap_err().contains("empty range"));
+        assert!(parse_seed_list("1,x").unwrap_err().contains("'x'"));
+        assert!(parse_seed_list("1,2,1")
+            .unwrap_err()
+            .contains("repeats seed 1"));
+        assert!(parse_seed_list("").is_err());
+    }
+
+    #[test]
+    fn n_past_action_takes_both_spellings() {
+        for flag in ["--n_past_action", "--n-past-action"] {
+            let cli = Cli::try_parse_from(["graspmap", "eval", "--task", "empty_bin", flag, "8"])
+                .unwrap();
+            let Command::Eval(args) = cli.command else {
+                panic!("parsed as another command")
+            };
+            assert_eq!(args.n_past_action, 8);
+            assert_eq!(args.task, Task::EmptyBin);
+        }
+    }
+
+    #[test]
+    fn task_names_are_spelled_as_the_reference_spells_them() {
+        let names: Vec<&str> = Task::ALL.iter().map(|t| t.name()).collect();
+        assert_eq!(names, ["train", "test", "empty_bin"]);
+        let cli = Cli::try_parse_from(["graspmap", "eval", "--task", "empty_bin"]).unwrap();
+        let Command::Eval(args) = cli.command else {
+            panic!("parsed as another command")
+        };
+        assert_eq!(args.task, Task::EmptyBin);
+        assert!(Cli::try_parse_from(["graspmap", "eval", "--task", "emptybin"]).is_err());
+    }
+
+    #[test]
+    fn cli_definition_is_consistent() {
+        use clap::CommandFactory;
+        Cli::command().debug_assert();
+    }
+}

@@ -1,0 +1,175 @@
+//! From parsed flags to the commands' typed configs: defaults that depend on other flags,
+//! combinations that do not work together, and paths under the data directory.
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context as _};
+
+use super::{EvalArgs, GlobalArgs, GraspArgs, LabelArgs, PredictArgs, TrainArgs};
+use crate::assets::objects::{ObjectLibrary, SplitFile};
+use crate::commands::eval::EvalConfig;
+use crate::commands::grasp::{GraspChoice, GraspConfig};
+use crate::commands::label::{ClickNoise, ClickSource, LabelConfig};
+use crate::commands::predict::PredictConfig;
+use crate::commands::train::TrainOptions;
+use crate::commands::Context;
+use crate::grasp::PixelGrasp;
+use crate::model::train::TrainConfig;
+use crate::policy::affordance::SuppressionConfig;
+use crate::policy::model::ModelPolicyConfig;
+use crate::sim::WorkcellConfig;
+
+impl GlobalArgs {
+    /// The settings every command shares.
+    pub(super) fn context(&self) -> anyhow::Result<Context> {
+        let objects = match &self.objects_dir {
+            Some(dir) if !dir.is_dir() => bail!(
+                "--objects-dir {} is not a directory (it should hold <Name>/model.urdf)",
+                dir.display()
+            ),
+            Some(dir) => ObjectLibrary::new(dir),
+            None => ObjectLibrary::bundled(),
+        };
+        let split = match &self.split {
+            Some(path) => SplitFile::Path(path.clone()),
+            None => objects.default_split(),
+        };
+        let threads = self.threads.unwrap_or_else(|| {
+            std::thread::available_parallelism()
+                .map_or(1, |n| n.get().min(u16::MAX as usize) as u16)
+        });
+        Ok(Context {
+            data: self.data.clone(),
+            objects,
+            split,
+            threads,
+            json: self.json.clone(),
+            quiet: self.quiet,
+        })
+    }
+}
+
+/// The `--checkpoint` given, or where `predict` and `eval` find the model by default.
+fn checkpoint_path(data: &Path, given: Option<PathBuf>) -> PathBuf {
+    given.unwrap_or_else(|| data.join("affordance").join("best.safetensors"))
+}
+
+impl EvalArgs {
+    pub(super) fn config(self, data: &Path) -> anyhow::Result<EvalConfig> {
+        let model = ModelPolicyConfig {
+            check: self.collision_check,
+            verify_top: self.verify_top,
+            centring: self.centring,
+        };
+        model.validate()?;
+        let seeds = match (self.seeds, self.seed) {
+            (Some(list), _) => list.0,
+            (None, Some(seed)) => vec![seed],
+            (None, None) => vec![self.task.default_seed()],
+        };
+        Ok(EvalConfig {
+            task: self.task,
+            policy: self.policy,
+            checkpoint: checkpoint_path(data, self.checkpoint),
+            precision: self.precision.resolve(),
+            seeds,
+            suppression: SuppressionConfig {
+                remember: self.n_past_action,
+                sigma_px: self.suppression_sigma,
+                rotation_reach: usize::from(self.suppress_rotation_reach),
+                remember_successes: self.suppress_successes,
+            },
+            model,
+            max_attempts: self.max_attempts,
+            record: self.record,
+        })
+    }
+}
+
+impl PredictArgs {
+    pub(super) fn config(self, data: &Path) -> PredictConfig {
+        let out = self.out.unwrap_or_else(|| {
+            let stem = self
+                .image
+                .file_stem()
+                .map_or_else(|| "image".into(), |s| s.to_string_lossy().into_owned());
+            data.join("affordance")
+                .join("predict_vis")
+                .join(format!("{stem}.png"))
+        });
+        PredictConfig {
+            checkpoint: checkpoint_path(data, self.checkpoint),
+            image: self.image,
+            out,
+            precision: self.precision.resolve(),
+        }
+    }
+}
+
+impl GraspArgs {
+    pub(super) fn config(self) -> anyhow::Result<GraspConfig> {
+        let choice = match (&self.pixel, self.angle) {
+            (Some(pixel), Some(angle)) => {
+                let (u, v) = super::parse_pixel(pixel)?;
+                let grasp = PixelGrasp::checked(f64::from(u), f64::from(v), angle)
+                    .with_context(|| format!("--angle {angle}"))?;
+                GraspChoice::Given(grasp)
+            }
+            _ if self.oracle => GraspChoice::Oracle,
+            _ => GraspChoice::Random,
+        };
+        Ok(GraspConfig {
+            object: self.object,
+            seed: self.seed,
+            choice,
+            workcell: WorkcellConfig {
+                grip_force: self.grip_force,
+                ..WorkcellConfig::default()
+            },
+            record: self.record,
+            image: self.image,
+        })
+    }
+}
+
+impl LabelArgs {
+    pub(super) fn config(self, data: &Path) -> LabelConfig {
+        let source = match (self.clicks, self.interactive) {
+            (Some(path), _) => ClickSource::File(path),
+            (None, true) => ClickSource::Interactive {
+                preview: self
+                    .preview
+                    .unwrap_or_else(|| data.join("labels").join("preview.png")),
+            },
+            (None, false) => ClickSource::Scripted,
+        };
+        LabelConfig {
+            per_object: self.per_object,
+            max_rounds: self.max_rounds,
+            seed: self.seed,
+            source,
+            noise: ClickNoise {
+                px: self.click_noise_px,
+                deg: self.angle_noise_deg,
+            },
+            force: self.force,
+            check: self.check,
+        }
+    }
+}
+
+impl TrainArgs {
+    pub(super) fn options(self) -> TrainOptions {
+        TrainOptions {
+            config: TrainConfig {
+                epochs: self.epochs,
+                batch_size: self.batch_size as usize,
+                lr: self.lr,
+                seed: self.seed,
+                precision: self.precision.resolve(),
+                ..TrainConfig::default()
+            },
+            resume: self.resume,
+        }
+    }
+}

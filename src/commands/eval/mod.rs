@@ -1,0 +1,458 @@
+//! `graspmap eval`: a policy (model, random or oracle) picks objects in simulation; per-object
+//! tables, Wilson intervals, visualisations and videos (docs/evaluation.md).
+
+mod results;
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context as _;
+use image::RgbImage;
+
+use super::report::write_report;
+use super::video::save_gif_atomic;
+use super::Context;
+use crate::assets::objects::ObjectModel;
+use crate::data::atomic::save_image_atomic;
+use crate::grasp::draw::draw_grasp;
+use crate::grasp::world_grasp;
+use crate::model::inference::AffordanceModel;
+use crate::model::unet::Precision;
+use crate::named::Named;
+use crate::policy::affordance::{Suppression, SuppressionConfig};
+use crate::policy::baselines::{OraclePolicy, RandomPolicy};
+use crate::policy::model::{ModelPolicy, ModelPolicyConfig};
+use crate::policy::{Observation, Policy};
+use crate::sim::pick::{PickOutcome, PickReason};
+use crate::sim::{ObjectLocation, Workcell, WorkcellConfig};
+use results::{report_lines, summarise, AttemptRecord, AttemptTiming, BinOutcome, SceneRun};
+
+/// Attempts per object in the train and test tasks (the reference's).
+pub const ATTEMPTS_PER_OBJECT: u32 = 3;
+/// Offset of the train/test drop seeds (the reference's): seed + 100·i + a + 10000.
+pub const SINGLE_OBJECT_SEED_OFFSET: u64 = 10_000;
+/// Physics steps between episode video frames: 10 fps, so that a 25-attempt episode stays
+/// near 15 MB (`grasp --record` films one attempt at 24 fps).
+pub const EPISODE_EVERY_STEPS: u64 = 24;
+/// GIF frame delay matching [`EPISODE_EVERY_STEPS`] at 240 Hz, in hundredths of a second.
+pub const EPISODE_DELAY_CS: u32 = 10;
+/// The default empty_bin scene (the reference's).
+pub const DEFAULT_EMPTY_BIN_SEED: u64 = 2;
+
+/// The evaluations, spelled as the reference spells them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Task {
+    /// Each training object alone, 3 attempts each.
+    Train,
+    /// Each test (unseen) object alone, 3 attempts each.
+    Test,
+    /// All 15 objects in bin 1 at once; move as many as possible to bin 2.
+    EmptyBin,
+}
+
+impl Named for Task {
+    const ALL: &'static [Self] = &[Self::Train, Self::Test, Self::EmptyBin];
+
+    fn name(self) -> &'static str {
+        match self {
+            Self::Train => "train",
+            Self::Test => "test",
+            Self::EmptyBin => "empty_bin",
+        }
+    }
+
+    fn help(self) -> &'static str {
+        match self {
+            Self::Train => "each training object alone, 3 attempts each",
+            Self::Test => "each test (unseen) object alone, 3 attempts each",
+            Self::EmptyBin => "all 15 objects in bin 1 at once; move as many as possible to bin 2",
+        }
+    }
+}
+
+impl Task {
+    /// The seed a run without `--seed` uses: 2 for empty_bin, 0 otherwise (the reference's).
+    pub fn default_seed(self) -> u64 {
+        match self {
+            Task::EmptyBin => DEFAULT_EMPTY_BIN_SEED,
+            Task::Train | Task::Test => 0,
+        }
+    }
+}
+
+/// Who chooses the grasps.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum PolicyKind {
+    /// The trained affordance model.
+    Model,
+    /// A random pixel of bin 1's floor and a random angle.
+    Random,
+    /// The planner, from ground-truth masks and depth.
+    Oracle,
+}
+
+impl Named for PolicyKind {
+    const ALL: &'static [Self] = &[Self::Model, Self::Random, Self::Oracle];
+
+    fn name(self) -> &'static str {
+        match self {
+            Self::Model => "model",
+            Self::Random => "random",
+            Self::Oracle => "oracle",
+        }
+    }
+
+    fn help(self) -> &'static str {
+        match self {
+            Self::Model => "the trained affordance model (argmax over 8 rotations)",
+            Self::Random => "a uniformly random point of bin 1's floor and a random angle",
+            Self::Oracle => "the workcell's planner, from ground-truth masks and depth",
+        }
+    }
+}
+
+/// Everything one `graspmap eval` run needs, resolved and checked by the CLI.
+#[derive(Debug, Clone)]
+pub struct EvalConfig {
+    /// Which evaluation.
+    pub task: Task,
+    /// Who chooses the grasps.
+    pub policy: PolicyKind,
+    /// The model's weights (model policy).
+    pub checkpoint: PathBuf,
+    /// Arithmetic of the network.
+    pub precision: Precision,
+    /// Base seeds, run one after another and aggregated.
+    pub seeds: Vec<u64>,
+    /// Failure suppression (model policy).
+    pub suppression: SuppressionConfig,
+    /// The model policy's checks.
+    pub model: ModelPolicyConfig,
+    /// empty_bin: most pick attempts per scene. Default 25.
+    pub max_attempts: u32,
+    /// Where to write the episode video (one seed only).
+    pub record: Option<PathBuf>,
+}
+
+/// Settings shared by every scene of one evaluation.
+struct Evaluation<'a> {
+    context: &'a Context,
+    policy: Box<dyn Policy>,
+    suppression: SuppressionConfig,
+    workcell: WorkcellConfig,
+    vis_dir: PathBuf,
+    /// Put each seed's visualisations in a seed<S>/ subfolder (several seeds).
+    per_seed_vis: bool,
+    max_attempts: u32,
+    recording: Option<Vec<RgbImage>>,
+    bar: indicatif::ProgressBar,
+}
+
+/// Runs the command.
+pub fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
+    let start = Instant::now();
+    let seeds = config.seeds.clone();
+    crate::model::use_threads(context.threads);
+    let policy: Box<dyn Policy> = match config.policy {
+        PolicyKind::Model => Box::new(ModelPolicy::new(
+            AffordanceModel::load(&config.checkpoint, config.precision)?,
+            config.model,
+        )?),
+        PolicyKind::Random => Box::new(RandomPolicy),
+        PolicyKind::Oracle => Box::new(OraclePolicy),
+    };
+    let split = context.split()?;
+    let names: Vec<String> = match config.task {
+        Task::Train => split.train.clone(),
+        Task::Test => split.test.clone(),
+        Task::EmptyBin => split.all(),
+    };
+    let models = context.objects.load_all(&names)?;
+    let vis_dir = context.data.join("affordance").join(match config.task {
+        Task::Train => "eval_pick_training_vis",
+        Task::Test => "eval_pick_testing_vis",
+        Task::EmptyBin => "eval_empty_bin_vis",
+    });
+    let per_scene = match config.task {
+        Task::EmptyBin => u64::from(config.max_attempts),
+        _ => models.len() as u64 * u64::from(ATTEMPTS_PER_OBJECT),
+    };
+    let mut evaluation = Evaluation {
+        context,
+        policy,
+        suppression: config.suppression,
+        workcell: WorkcellConfig::default(),
+        vis_dir,
+        per_seed_vis: seeds.len() > 1,
+        max_attempts: config.max_attempts,
+        recording: config.record.as_ref().map(|_| Vec::new()),
+        bar: context.progress_bar("attempts", per_scene * seeds.len() as u64, 0),
+    };
+
+    let mut runs = Vec::new();
+    for &seed in &seeds {
+        let run = match config.task {
+            Task::EmptyBin => evaluation.empty_bin(&models, seed)?,
+            Task::Train | Task::Test => evaluation.single_objects(&models, seed)?,
+        };
+        runs.push(run);
+    }
+    evaluation.bar.finish_and_clear();
+    if let (Some(path), Some(frames)) = (&config.record, &evaluation.recording) {
+        save_gif_atomic(frames, EPISODE_DELAY_CS, path)
+            .with_context(|| format!("writing --record {}", path.display()))?;
+        context.say(&format!("wrote the episode video to {}", path.display()));
+    }
+
+    let results = summarise(
+        config.task,
+        config.policy,
+        seeds.clone(),
+        &names,
+        runs,
+        start.elapsed().as_secs_f64(),
+    );
+    for line in report_lines(&results, config.suppression.remember) {
+        context.say(&line);
+    }
+    if let Some(json) = &context.json {
+        write_report(
+            json,
+            "eval",
+            seeds[0],
+            &resolved_config(context, &config, &names),
+            &results,
+        )?;
+    }
+    Ok(())
+}
+
+/// The configuration as the report records it.
+fn resolved_config(context: &Context, config: &EvalConfig, names: &[String]) -> serde_json::Value {
+    let model = config.policy == PolicyKind::Model;
+    serde_json::json!({
+        "global": context,
+        "task": config.task,
+        "policy": config.policy,
+        "checkpoint": model.then_some(&config.checkpoint),
+        "precision": model.then_some(config.precision),
+        "seeds": config.seeds,
+        "suppression": config.suppression,
+        "collision_check": model.then_some(config.model.check),
+        "verify_top": model.then_some(config.model.verify_top),
+        "centring": model && config.model.centring,
+        "max_attempts": config.max_attempts,
+        "attempts_per_object": ATTEMPTS_PER_OBJECT,
+        "objects": names,
+        "workcell": WorkcellConfig::default(),
+        "record": config.record,
+    })
+}
+
+impl Evaluation<'_> {
+    /// train/test: each object alone, [`ATTEMPTS_PER_OBJECT`] fresh drops each.
+    fn single_objects(&mut self, models: &[ObjectModel], seed: u64) -> anyhow::Result<SceneRun> {
+        let mut attempts = Vec::new();
+        for (i, model) in models.iter().enumerate() {
+            for a in 0..ATTEMPTS_PER_OBJECT {
+                let started = Instant::now();
+                let drop_seed = seed + 100 * i as u64 + u64::from(a) + SINGLE_OBJECT_SEED_OFFSET;
+                let mut cell = Workcell::new(&self.workcell)?;
+                cell.drop_objects(std::slice::from_ref(model), drop_seed)?;
+                let drop_seconds = started.elapsed().as_secs_f64();
+                // Suppression remembers actions within a scene; each attempt here is a new one.
+                let memory = Suppression::new(self.suppression);
+                let vis = self.vis_path(seed, &format!("{}_{a}.png", model.name));
+                let mut record = self.attempt(&mut cell, &memory, drop_seed, a, vis)?;
+                record.object = Some(model.name.clone());
+                record.timing.sim += drop_seconds;
+                record.timing.wall = started.elapsed().as_secs_f64();
+                self.bar.inc(1);
+                self.bar.set_message(format!(
+                    "{} {}",
+                    model.name,
+                    if record.success {
+                        "success"
+                    } else {
+                        record.reason.as_str()
+                    }
+                ));
+                attempts.push(record);
+            }
+        }
+        Ok(SceneRun {
+            seed,
+            attempts,
+            bin: None,
+        })
+    }
+
+    /// empty_bin: every object in bin 1 at once, picked until the bin is empty or attempts run out.
+    fn empty_bin(&mut self, models: &[ObjectModel], seed: u64) -> anyhow::Result<SceneRun> {
+        let started = Instant::now();
+        let mut cell = Workcell::new(&self.workcell)?;
+        cell.drop_objects(models, seed)?;
+        let mut setup_seconds = started.elapsed().as_secs_f64();
+        let total = models.len();
+        let mut memory = Suppression::new(self.suppression);
+        let mut attempts = Vec::new();
+        for a in 0..self.max_attempts {
+            if count(&cell, ObjectLocation::Bin1) == 0 {
+                self.bar.inc(u64::from(self.max_attempts - a));
+                break;
+            }
+            let attempt_start = Instant::now();
+            let vis = self.vis_path(seed, &format!("seed{seed}_attempt{a:02}.png"));
+            let mut record = self.attempt(&mut cell, &memory, seed, a, vis)?;
+            if let Some(choice) = record.choice {
+                memory.record(choice, record.success);
+            }
+            let moved = count(&cell, ObjectLocation::Bin2);
+            record.moved = Some(moved);
+            record.timing.wall = attempt_start.elapsed().as_secs_f64() + setup_seconds;
+            record.timing.sim += setup_seconds;
+            setup_seconds = 0.0;
+            let line = format!("{moved}/{total} objects moved");
+            self.bar.suspend(|| self.context.say(&line));
+            self.bar.inc(1);
+            attempts.push(record);
+        }
+        let left = count(&cell, ObjectLocation::Bin1);
+        let line = format!("{left} objects left in the bin.");
+        self.bar.suspend(|| self.context.say(&line));
+        let locations: BTreeMap<String, ObjectLocation> = cell
+            .objects()
+            .iter()
+            .enumerate()
+            .map(|(i, o)| (o.model.name.clone(), cell.locate(i)))
+            .collect();
+        Ok(SceneRun {
+            seed,
+            attempts,
+            bin: Some(BinOutcome {
+                moved: count(&cell, ObjectLocation::Bin2),
+                left,
+                lost: count(&cell, ObjectLocation::Lost),
+                locations,
+            }),
+        })
+    }
+
+    /// Where a visualisation goes, for the policies that draw one.
+    fn vis_path(&self, seed: u64, file: &str) -> PathBuf {
+        if self.per_seed_vis {
+            self.vis_dir.join(format!("seed{seed}")).join(file)
+        } else {
+            self.vis_dir.join(file)
+        }
+    }
+
+    /// Looks, decides, writes the visualisation and picks.
+    fn attempt(
+        &mut self,
+        cell: &mut Workcell,
+        memory: &Suppression,
+        drop_seed: u64,
+        attempt: u32,
+        vis: PathBuf,
+    ) -> anyhow::Result<AttemptRecord> {
+        let render_start = Instant::now();
+        let frame = cell.capture();
+        let rgb = frame.to_rgb_image();
+        let render = render_start.elapsed().as_secs_f64();
+        let in_bin: Vec<u16> = cell
+            .objects()
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| cell.locate(*i) == ObjectLocation::Bin1)
+            .map(|(_, o)| o.id)
+            .collect();
+        let camera = *cell.camera();
+        let view = Observation {
+            camera: &camera,
+            frame: &frame,
+            rgb: &rgb,
+            in_bin: &in_bin,
+            // The policy's own stream: one per attempt, independent of the drop.
+            attempt_seed: drop_seed
+                .wrapping_mul(1_000)
+                .wrapping_add(u64::from(attempt)),
+        };
+        let decision = self.policy.decide(&view, memory);
+        let vis_written = match &decision.vis {
+            Some(image) => {
+                save_image_atomic(image, &vis)?;
+                Some(vis)
+            }
+            None => None,
+        };
+        let aimed_at = decision.grasp.as_ref().ok().and_then(|g| {
+            let id = frame.id_at(g.u, g.v);
+            cell.objects()
+                .iter()
+                .find(|o| o.id == id)
+                .map(|o| o.model.name.clone())
+        });
+        if self.recording.is_some() {
+            cell.start_recording(EPISODE_EVERY_STEPS);
+        }
+        let sim_start = Instant::now();
+        let outcome = match &decision.grasp {
+            Ok(g) => cell.pick(&world_grasp(&camera, &frame, *g)),
+            Err(why) => PickOutcome::failure(PickReason::Ungraspable, why.to_string()),
+        };
+        let sim = sim_start.elapsed().as_secs_f64();
+        if let Some(frames) = &mut self.recording {
+            let mut view = rgb.clone();
+            if let Ok(g) = &decision.grasp {
+                draw_grasp(&mut view, g);
+            }
+            let oblique = cell.take_recording();
+            frames.extend(oblique.iter().map(|o| side_by_side(o, &view)));
+        }
+        Ok(AttemptRecord {
+            drop_seed,
+            attempt,
+            object: None,
+            grasp: decision.grasp.as_ref().ok().copied(),
+            choice: decision.choice,
+            success: outcome.success,
+            reason: outcome.reason,
+            detail: outcome.detail,
+            aimed_at,
+            held: outcome.object,
+            moved: None,
+            vis: vis_written,
+            timing: AttemptTiming {
+                wall: 0.0,
+                sim,
+                render,
+                network: decision.network_seconds,
+            },
+        })
+    }
+}
+
+fn count(cell: &Workcell, place: ObjectLocation) -> usize {
+    (0..cell.objects().len())
+        .filter(|&i| cell.locate(i) == place)
+        .count()
+}
+
+/// A video frame: the oblique view, and the camera view with the grasp scaled to its height.
+fn side_by_side(oblique: &RgbImage, camera_view: &RgbImage) -> RgbImage {
+    let height = oblique.height();
+    let scaled = image::imageops::resize(
+        camera_view,
+        height,
+        height,
+        image::imageops::FilterType::Nearest,
+    );
+    let mut out = RgbImage::new(oblique.width() + height, height);
+    image::imageops::replace(&mut out, oblique, 0, 0);
+    image::imageops::replace(&mut out, &scaled, i64::from(oblique.width()), 0);
+    out
+}

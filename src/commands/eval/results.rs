@@ -1,0 +1,302 @@
+//! What an evaluation reports: the attempt records, per-object and per-scene tables, Wilson
+//! intervals and timings, as JSON (`graspmap.eval/1`) and as printed lines.
+
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+use super::{PolicyKind, Task};
+use crate::grasp::PixelGrasp;
+use crate::metrics::{median, FailureTally, Rate, Spread};
+use crate::named::Named;
+use crate::policy::affordance::Choice;
+use crate::sim::pick::PickReason;
+use crate::sim::ObjectLocation;
+
+/// Wall seconds of one attempt, by what they were spent on.
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+pub struct AttemptTiming {
+    /// Everything, from the drop (train/test) or the previous attempt (empty_bin) to the report.
+    pub wall: f64,
+    /// Physics: the drop (train/test) and the pick.
+    pub sim: f64,
+    /// The top-down camera image.
+    pub render: f64,
+    /// Rotations, network, suppression and argmax (model policy).
+    pub network: f64,
+}
+
+/// One pick attempt.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct AttemptRecord {
+    /// The scene's drop seed.
+    pub drop_seed: u64,
+    /// 0-based attempt number (per object in train/test, per scene in empty_bin).
+    pub attempt: u32,
+    /// train/test: the object alone in the bin.
+    pub object: Option<String>,
+    /// The grasp executed; absent when the policy found none.
+    pub grasp: Option<PixelGrasp>,
+    /// Model policy: the map the grasp came from and its score there.
+    pub choice: Option<Choice>,
+    /// Whether an object was lifted, carried and placed.
+    pub success: bool,
+    /// Why the attempt ended so.
+    pub reason: PickReason,
+    /// Human-readable detail.
+    pub detail: String,
+    /// The object whose surface the camera saw at the grasp centre (ground truth, for the
+    /// report only; no policy sees it).
+    pub aimed_at: Option<String>,
+    /// The object that was held, if any.
+    pub held: Option<String>,
+    /// empty_bin: objects in bin 2 after this attempt.
+    pub moved: Option<usize>,
+    /// Where the visualisation went.
+    pub vis: Option<PathBuf>,
+    /// Where the time went.
+    pub timing: AttemptTiming,
+}
+
+/// empty_bin: where each object ended up.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct BinOutcome {
+    /// Objects resting in bin 2.
+    pub moved: usize,
+    /// Objects resting in bin 1.
+    pub left: usize,
+    /// Objects anywhere else.
+    pub lost: usize,
+    /// Each object's final place.
+    pub locations: BTreeMap<String, ObjectLocation>,
+}
+
+/// One scene seed's run.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct SceneRun {
+    /// The base seed.
+    pub seed: u64,
+    /// Every attempt, in order.
+    pub attempts: Vec<AttemptRecord>,
+    /// empty_bin only.
+    pub bin: Option<BinOutcome>,
+}
+
+/// Per-object line of the train/test table.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct ObjectSummary {
+    /// Object name.
+    pub object: String,
+    /// Its attempts over all seeds.
+    pub attempts: usize,
+    /// Its successes.
+    pub successes: usize,
+    /// Failure reasons and how often each happened.
+    pub failures: FailureTally,
+}
+
+/// Mean per-attempt time.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub struct TimingSummary {
+    /// Attempts timed.
+    pub attempts: usize,
+    /// Mean of each part.
+    pub mean: AttemptTiming,
+    /// Median wall seconds.
+    pub median_wall: f64,
+    /// Wall seconds of the whole evaluation.
+    pub total_wall: f64,
+}
+
+/// Everything `eval --json` reports.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct EvalResults {
+    /// train, test or empty_bin.
+    pub task: Task,
+    /// model, random or oracle.
+    pub policy: PolicyKind,
+    /// The base seeds run.
+    pub seeds: Vec<u64>,
+    /// Pick success over all attempts, with its 95 % Wilson interval.
+    pub success: Rate,
+    /// train/test: by object.
+    pub per_object: Vec<ObjectSummary>,
+    /// empty_bin: objects moved per scene (mean ± std over seeds).
+    pub moved: Option<Spread>,
+    /// empty_bin: objects left in bin 1 per scene.
+    pub left: Option<Spread>,
+    /// empty_bin: objects lost per scene.
+    pub lost: Option<Spread>,
+    /// Every scene and attempt.
+    pub runs: Vec<SceneRun>,
+    /// Where the time went.
+    pub timing: TimingSummary,
+}
+
+/// The report of a whole evaluation from its scenes.
+pub(super) fn summarise(
+    task: Task,
+    policy: PolicyKind,
+    seeds: Vec<u64>,
+    names: &[String],
+    runs: Vec<SceneRun>,
+    total_wall: f64,
+) -> EvalResults {
+    let all: Vec<&AttemptRecord> = runs.iter().flat_map(|r| &r.attempts).collect();
+    let successes = all.iter().filter(|a| a.success).count();
+    let per_object = if task == Task::EmptyBin {
+        Vec::new()
+    } else {
+        names
+            .iter()
+            .map(|name| {
+                let mine: Vec<&&AttemptRecord> = all
+                    .iter()
+                    .filter(|a| a.object.as_deref() == Some(name))
+                    .collect();
+                let failures = failure_tally(mine.iter().copied().copied());
+                ObjectSummary {
+                    object: name.clone(),
+                    attempts: mine.len(),
+                    successes: mine.iter().filter(|a| a.success).count(),
+                    failures,
+                }
+            })
+            .collect()
+    };
+    let spread_of = |f: fn(&BinOutcome) -> usize| {
+        (task == Task::EmptyBin).then(|| {
+            let values: Vec<f64> = runs
+                .iter()
+                .filter_map(|r| r.bin.as_ref())
+                .map(|b| f(b) as f64)
+                .collect();
+            Spread::of(&values)
+        })
+    };
+    let n = all.len().max(1) as f64;
+    let mean_of = |f: fn(&AttemptTiming) -> f64| all.iter().map(|a| f(&a.timing)).sum::<f64>() / n;
+    let walls: Vec<f64> = all.iter().map(|a| a.timing.wall).collect();
+    EvalResults {
+        task,
+        policy,
+        seeds,
+        success: Rate::new(successes, all.len()),
+        per_object,
+        moved: spread_of(|b| b.moved),
+        left: spread_of(|b| b.left),
+        lost: spread_of(|b| b.lost),
+        timing: TimingSummary {
+            attempts: all.len(),
+            mean: AttemptTiming {
+                wall: mean_of(|t| t.wall),
+                sim: mean_of(|t| t.sim),
+                render: mean_of(|t| t.render),
+                network: mean_of(|t| t.network),
+            },
+            median_wall: median(&walls),
+            total_wall,
+        },
+        runs,
+    }
+}
+
+/// The failure reasons of a set of attempts.
+fn failure_tally<'a>(attempts: impl IntoIterator<Item = &'a AttemptRecord>) -> FailureTally {
+    FailureTally::of(
+        attempts
+            .into_iter()
+            .filter(|a| !a.success)
+            .map(|a| a.reason.as_str()),
+    )
+}
+
+/// The human-readable report: a table, the overall rate, and where the time went.
+pub(super) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<String> {
+    let mut lines = Vec::new();
+    let seeds = results
+        .seeds
+        .iter()
+        .map(u64::to_string)
+        .collect::<Vec<_>>()
+        .join(",");
+    let suppression = if n_past_action == 0 {
+        String::new()
+    } else {
+        format!(", n_past_action {n_past_action}")
+    };
+    let policy = results.policy.name();
+    let task = results.task.name();
+    lines.push(format!(
+        "eval --task {task}, policy {policy}, seed {seeds}{suppression}"
+    ));
+    if results.task == Task::EmptyBin {
+        lines.push(format!(
+            "{:>6} {:>8} {:>9} {:>6} {:>5} {:>5}  failures",
+            "seed", "attempts", "successes", "moved", "left", "lost"
+        ));
+        for run in &results.runs {
+            let Some(bin) = &run.bin else { continue };
+            lines.push(format!(
+                "{:>6} {:>8} {:>9} {:>6} {:>5} {:>5}  {}",
+                run.seed,
+                run.attempts.len(),
+                run.attempts.iter().filter(|a| a.success).count(),
+                bin.moved,
+                bin.left,
+                bin.lost,
+                failure_tally(&run.attempts).describe()
+            ));
+        }
+        if let (Some(moved), Some(lost)) = (&results.moved, &results.lost) {
+            let total = results.runs[0]
+                .bin
+                .as_ref()
+                .map_or(0, |b| b.locations.len());
+            lines.push(format!(
+                "objects moved: {:.1} ± {:.1} of {total} (min {}, max {}, over {} scene{}); lost {:.1}",
+                moved.mean,
+                moved.std,
+                moved.min,
+                moved.max,
+                moved.count,
+                if moved.count == 1 { "" } else { "s" },
+                lost.mean
+            ));
+        }
+        lines.push(format!("pick success: {}", results.success.describe()));
+    } else {
+        let width = results
+            .per_object
+            .iter()
+            .map(|o| o.object.len())
+            .max()
+            .unwrap_or(6)
+            .max(6);
+        lines.push(format!(
+            "{:<width$} {:>8} {:>9}  failures",
+            "object", "attempts", "successes"
+        ));
+        for o in &results.per_object {
+            lines.push(format!(
+                "{:<width$} {:>8} {:>9}  {}",
+                o.object,
+                o.attempts,
+                o.successes,
+                o.failures.describe()
+            ));
+        }
+        lines.push(format!("success rate: {}", results.success.describe()));
+    }
+    let t = &results.timing;
+    lines.push(format!(
+        "per attempt: {:.2} s wall (median {:.2}) = sim {:.2} + render {:.3} + network {:.3} + other {:.3}; total {:.1} s",
+        t.mean.wall,
+        t.median_wall,
+        t.mean.sim,
+        t.mean.render,
+        t.mean.network,
+        (t.mean.wall - t.mean.sim - t.mean.render - t.mean.network).max(0.0),
+        t.total_wall
+    ));
+    lines
+}

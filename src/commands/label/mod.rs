@@ -1,0 +1,460 @@
+//! `graspmap label`: collect grasp labels round by round, each verified by a simulated pick, resumable after any interruption.
+
+mod clicks;
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::Mutex;
+use std::time::Instant;
+
+use anyhow::bail;
+
+use super::report::write_report;
+use super::Context;
+use crate::assets::objects::ObjectModel;
+use crate::data::labels::{Label, LabelStore, Labels, Progress};
+use crate::grasp::world_grasp;
+use crate::metrics::FailureTally;
+use crate::sim::pick::PickReason;
+use crate::sim::{Workcell, WorkcellConfig};
+use clicks::{check_enough_clicks, read_clicks, Clicker};
+
+/// One `graspmap label` run, resolved by the CLI.
+#[derive(Debug, Clone)]
+pub struct LabelConfig {
+    /// Successful labels wanted per training object. Default 12.
+    pub per_object: u32,
+    /// Rounds allowed per object before giving up on it. Default 40.
+    pub max_rounds: u32,
+    /// Base seed: round r of training object j drops with seed + 100·j + r. Default 0.
+    pub seed: u64,
+    /// Where clicks come from.
+    pub source: ClickSource,
+    /// Scripted clicks' human-like noise.
+    pub noise: ClickNoise,
+    /// Delete existing labels first.
+    pub force: bool,
+    /// Only validate the existing dataset.
+    pub check: bool,
+}
+
+/// Where a round's click comes from.
+#[derive(Debug, Clone, PartialEq)]
+pub enum ClickSource {
+    /// The oracle planner in 22.5° steps, with [`ClickNoise`].
+    Scripted,
+    /// A JSON list of {"object", "x", "y", "angle"}, one per round.
+    File(PathBuf),
+    /// A person at stdin; the preview image goes to this path.
+    Interactive {
+        /// Where the image with the cursor's grasp is written.
+        preview: PathBuf,
+    },
+}
+
+/// Standard deviations of the scripted clicker's noise.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct ClickNoise {
+    /// Of the click position, in pixels.
+    pub px: f32,
+    /// Of the angle, in degrees (before snapping to 22.5°).
+    pub deg: f32,
+}
+
+/// One object's tally.
+#[derive(Debug, Default, Clone, serde::Serialize)]
+struct ObjectSummary {
+    object: String,
+    /// Rounds run for this object, earlier sessions included.
+    rounds: u32,
+    /// Labels stored for it.
+    labels: usize,
+    /// Labels added by this run.
+    new_labels: usize,
+    /// Failed rounds of this run by reason.
+    failures: FailureTally,
+}
+
+#[derive(Debug, serde::Serialize)]
+struct LabelResults {
+    labels_dir: String,
+    source: &'static str,
+    objects: Vec<ObjectSummary>,
+    total_labels: usize,
+    total_rounds: u32,
+    wall_seconds: f64,
+}
+
+/// Runs the command.
+pub fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
+    let store = LabelStore::new(context.data.join("labels"));
+    if args.check {
+        return check(context, &store, &context.objects.names());
+    }
+    let split = context.split()?;
+    let models = context.objects.load_all(&split.train)?;
+    let clicker = match &args.source {
+        ClickSource::File(path) => Clicker::File {
+            clicks: read_clicks(path, &split.train)?,
+        },
+        ClickSource::Interactive { preview } => Clicker::Interactive {
+            preview: preview.clone(),
+        },
+        ClickSource::Scripted => Clicker::Scripted {
+            noise_px: args.noise.px,
+            noise_deg: args.noise.deg,
+        },
+    };
+
+    if args.force {
+        store.clear()?;
+    }
+    store.remove_stale_temporaries()?;
+    let mut labels = store.load()?;
+    let mut progress = resume_point(&store, &labels, &args, clicker.name(), &split.train)?;
+    if let Clicker::File { clicks } = &clicker {
+        check_enough_clicks(clicks, &labels, &progress, &args, &split.train)?;
+    }
+    labels.arrange(&split.train);
+    for object in &split.train {
+        let (rounds, recorded) = progress.entry(object);
+        progress.set_rounds(object, rounds, recorded);
+    }
+
+    let start = Instant::now();
+    let interactive = matches!(clicker, Clicker::Interactive { .. });
+    // A person at the prompt needs a quiet terminal.
+    let bar = if interactive {
+        indicatif::ProgressBar::hidden()
+    } else {
+        context.progress_bar(
+            "labels",
+            args.per_object as u64 * split.train.len() as u64,
+            labels_in(&labels, &split.train, args.per_object),
+        )
+    };
+    let stop = AtomicBool::new(false);
+    let job = ObjectJob {
+        context,
+        args: &args,
+        store: &store,
+        clicker: &clicker,
+        bar: &bar,
+        verbose_rounds: !matches!(clicker, Clicker::Scripted { .. }),
+        stop: &stop,
+    };
+    // A person answers one prompt at a time.
+    let workers = if interactive {
+        1
+    } else {
+        usize::from(context.threads)
+    };
+    let summaries = job.label_all(
+        &split.train,
+        &models,
+        &Mutex::new(Shared { labels, progress }),
+        workers,
+    )?;
+    bar.finish_and_clear();
+
+    let results = LabelResults {
+        labels_dir: store.dir().display().to_string(),
+        source: clicker.name(),
+        total_labels: summaries.iter().map(|s| s.labels).sum(),
+        total_rounds: summaries.iter().map(|s| s.rounds).sum(),
+        objects: summaries,
+        wall_seconds: start.elapsed().as_secs_f64(),
+    };
+    print_summary(context, &results);
+    if let Some(json) = &context.json {
+        let resolved = serde_json::json!({
+            "global": context,
+            "per_object": args.per_object,
+            "max_rounds": args.max_rounds,
+            "source": clicker.name(),
+            "clicks": match &args.source {
+                ClickSource::File(path) => Some(path),
+                _ => None,
+            },
+            "click_noise_px": args.noise.px,
+            "angle_noise_deg": args.noise.deg,
+            "train": split.train,
+        });
+        write_report(json, "label", args.seed, &resolved, &results)?;
+    }
+    Ok(())
+}
+
+/// Dataset state shared by the workers.
+struct Shared {
+    labels: Labels,
+    progress: Progress,
+}
+
+fn lock<T>(mutex: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
+    // A worker that panicked mid-write has already lost its round; the files on disk are
+    // whole (atomic renames), so the state is still usable.
+    mutex
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// What every worker needs to label one object.
+struct ObjectJob<'a> {
+    context: &'a Context,
+    args: &'a LabelConfig,
+    store: &'a LabelStore,
+    clicker: &'a Clicker,
+    bar: &'a indicatif::ProgressBar,
+    verbose_rounds: bool,
+    stop: &'a AtomicBool,
+}
+
+impl ObjectJob<'_> {
+    /// Labels every object on `workers` threads, objects handed out in split order. Objects are
+    /// independent (each has its own rounds and seeds); the dataset files are written under one
+    /// lock, in split order, so the result does not depend on which worker finishes first.
+    fn label_all(
+        &self,
+        objects: &[String],
+        models: &[ObjectModel],
+        shared: &Mutex<Shared>,
+        workers: usize,
+    ) -> anyhow::Result<Vec<ObjectSummary>> {
+        let next = AtomicUsize::new(0);
+        let outcomes: Mutex<Vec<Option<anyhow::Result<ObjectSummary>>>> =
+            Mutex::new((0..objects.len()).map(|_| None).collect());
+        std::thread::scope(|scope| {
+            for _ in 0..workers.min(objects.len()).max(1) {
+                scope.spawn(|| loop {
+                    let j = next.fetch_add(1, Ordering::SeqCst);
+                    if j >= objects.len() || self.stop.load(Ordering::SeqCst) {
+                        break;
+                    }
+                    let outcome = self.label_object(j, &objects[j], &models[j], shared);
+                    if outcome.is_err() {
+                        self.stop.store(true, Ordering::SeqCst);
+                    }
+                    lock(&outcomes)[j] = Some(outcome);
+                });
+            }
+        });
+        let mut summaries = Vec::new();
+        for outcome in lock(&outcomes).drain(..).flatten() {
+            summaries.push(outcome?);
+        }
+        Ok(summaries)
+    }
+
+    /// Runs rounds for training object `j` until it has its labels.
+    fn label_object(
+        &self,
+        j: usize,
+        object: &str,
+        model: &ObjectModel,
+        shared: &Mutex<Shared>,
+    ) -> anyhow::Result<ObjectSummary> {
+        let args = self.args;
+        let config = WorkcellConfig::default();
+        let mut summary = ObjectSummary {
+            object: object.to_owned(),
+            ..Default::default()
+        };
+        let (mut round, mut have) = {
+            let state = lock(shared);
+            (
+                state.progress.rounds_of(object),
+                state.labels.of(object).len(),
+            )
+        };
+        while have < args.per_object as usize {
+            if self.stop.load(Ordering::SeqCst) {
+                // Another object failed; this one resumes on the next run.
+                break;
+            }
+            if round >= args.max_rounds {
+                bail!(
+                    "{object}: only {have} of {} labels after {round} rounds (--max-rounds {}); raise --max-rounds or check the clicks",
+                    args.per_object,
+                    args.max_rounds
+                );
+            }
+            let round_seed = args.seed + 100 * j as u64 + round as u64;
+            self.bar
+                .set_message(format!("{object} {have}/{} round {round}", args.per_object));
+            let mut cell = Workcell::new(&config)?;
+            cell.drop_objects(std::slice::from_ref(model), round_seed)?;
+            let frame = cell.capture();
+            let camera = *cell.camera();
+            let click = self
+                .clicker
+                .click(object, round, round_seed, &camera, &frame)?;
+            let (reason, detail) = match &click {
+                Ok(grasp) => {
+                    let outcome = cell.pick(&world_grasp(&camera, &frame, *grasp));
+                    (outcome.reason, outcome.detail)
+                }
+                Err(why) => (PickReason::Ungraspable, why.clone()),
+            };
+            let line = match &click {
+                Ok(g) => format!(
+                    "{object} round {round} click ({}, {}, {:.1}°): {} {detail}",
+                    g.u,
+                    g.v,
+                    g.angle_deg,
+                    reason.as_str()
+                ),
+                Err(_) => format!("{object} round {round}: no click: {detail}"),
+            };
+            round += 1;
+            {
+                let mut state = lock(shared);
+                let Shared { labels, progress } = &mut *state;
+                if let (PickReason::Success, Ok(grasp)) = (reason, &click) {
+                    self.store.append(
+                        labels,
+                        object,
+                        Label::from(*grasp),
+                        &frame.to_rgb_image(),
+                    )?;
+                    summary.new_labels += 1;
+                    self.bar.inc(1);
+                } else {
+                    summary.failures.add(reason.as_str());
+                }
+                have = labels.of(object).len();
+                progress.set_rounds(object, round, have as u32);
+                self.store.save_progress(progress)?;
+            }
+            if self.verbose_rounds || reason != PickReason::Success {
+                self.bar.suspend(|| self.context.say(&line));
+            }
+        }
+        summary.rounds = round;
+        summary.labels = have;
+        Ok(summary)
+    }
+}
+
+fn labels_in(labels: &Labels, objects: &[String], cap: u32) -> u64 {
+    objects
+        .iter()
+        .map(|o| labels.of(o).len().min(cap as usize) as u64)
+        .sum()
+}
+
+fn print_summary(context: &Context, results: &LabelResults) {
+    context.say(&format!(
+        "{:<18} {:>6} {:>6} {:>4}  failures this run",
+        "object", "labels", "rounds", "new"
+    ));
+    for s in &results.objects {
+        context.say(&format!(
+            "{:<18} {:>6} {:>6} {:>4}  {}",
+            s.object,
+            s.labels,
+            s.rounds,
+            s.new_labels,
+            s.failures.describe()
+        ));
+    }
+    context.say(&format!(
+        "{} labels in {} rounds in {} ({:.1} s)",
+        results.total_labels, results.total_rounds, results.labels_dir, results.wall_seconds
+    ));
+}
+
+/// Where to continue: the rounds already run per object, from progress.json.
+fn resume_point(
+    store: &LabelStore,
+    labels: &Labels,
+    args: &LabelConfig,
+    source: &str,
+    train: &[String],
+) -> anyhow::Result<Progress> {
+    let fresh = Progress {
+        schema: Progress::SCHEMA.to_owned(),
+        seed: args.seed,
+        source: source.to_owned(),
+        rounds: Vec::new(),
+    };
+    let Some(mut progress) = store.load_progress()? else {
+        if !labels.is_empty() {
+            // A dataset from elsewhere (e.g. the reference tool): its rounds are unknown, so
+            // continue as if every earlier round had succeeded.
+            tracing::warn!(
+                "{} has labels but no progress file; continuing as if each label took one round",
+                store.dir().display()
+            );
+            let mut progress = fresh;
+            for object in train {
+                let n = labels.of(object).len() as u32;
+                progress.set_rounds(object, n, n);
+            }
+            return Ok(progress);
+        }
+        return Ok(fresh);
+    };
+    if progress.schema != Progress::SCHEMA {
+        bail!(
+            "{} has schema '{}', expected '{}' (rerun with --force to start over)",
+            store
+                .dir()
+                .join(crate::data::labels::PROGRESS_FILE)
+                .display(),
+            progress.schema,
+            Progress::SCHEMA
+        );
+    }
+    if progress.seed != args.seed || progress.source != source {
+        bail!(
+            "the labels in {} were made with --seed {} ({} clicks); rerun with those settings to resume, or with --force to start over",
+            store.dir().display(),
+            progress.seed,
+            progress.source
+        );
+    }
+    // A run killed between writing labels.json and progress.json: the label is there, its
+    // round is not counted yet.
+    for object in train {
+        let (rounds, recorded) = progress.entry(object);
+        let stored = labels.of(object).len() as u32;
+        if stored == recorded + 1 {
+            progress.set_rounds(object, rounds + 1, stored);
+        } else if stored != recorded {
+            bail!(
+                "{}: {object} has {stored} labels but progress.json records {recorded}; rerun with --force to start over",
+                store.dir().display()
+            );
+        }
+    }
+    Ok(progress)
+}
+
+/// `label --check`: every problem on stdout, then exit 2 if there was any.
+fn check(context: &Context, store: &LabelStore, known: &[String]) -> anyhow::Result<()> {
+    let problems = store.check(known);
+    for problem in &problems {
+        context.say(problem);
+    }
+    if let Some(json) = &context.json {
+        let resolved = serde_json::json!({ "global": context, "check": true });
+        let results = serde_json::json!({ "labels_dir": store.dir(), "problems": problems });
+        write_report(json, "label", 0, &resolved, &results)?;
+    }
+    if !problems.is_empty() {
+        bail!(
+            "{} problem(s) in {}; fix or remove the listed files, or relabel with --force",
+            problems.len(),
+            store.dir().display()
+        );
+    }
+    let labels = store.load()?;
+    context.say(&format!(
+        "{}: {} labels for {} objects, no problems",
+        store.dir().display(),
+        labels.len(),
+        labels.iter().count()
+    ));
+    Ok(())
+}

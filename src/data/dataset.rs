@@ -1,0 +1,584 @@
+//! Training samples from labelled images: angle bins, rotation to the bin, Gaussian targets, split (docs/learning.md).
+//!
+//! Only [`load_dataset`] touches the disk; everything else is a pure function of loaded images and
+//! an explicit seeded generator. Samples are plain `f32` arrays (CHW input, HW target) that the
+//! model layer turns into tensors.
+
+use anyhow::{bail, Context};
+use image::RgbImage;
+use rand::seq::SliceRandom;
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+
+use super::augment::{self, AugmentConfig};
+use super::labels::LabelStore;
+use crate::grasp::rotate::{rotate_image, rotate_point};
+use crate::grasp::{angle_bin, bin_angle, fingers, grasp_from_fingers, PixelGrasp, IMAGE_SIZE};
+
+/// Standard deviation of the target Gaussian, in pixels (ref).
+pub const TARGET_SIGMA_PX: f32 = 1.0;
+/// How often [`training_sample`] redraws an augmentation that pushes the grasp centre out of the
+/// image before it falls back to the unaugmented sample.
+pub const MAX_AUGMENT_TRIES: usize = 10;
+
+/// One network example, already rotated into its angle bin.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Sample {
+    /// Rotated image, 3 × H × W (CHW), RGB in [0, 1].
+    pub input: Vec<f32>,
+    /// H × W Gaussian (σ = 1 px, peak 1) at the pixel holding the rotated grasp centre.
+    pub target: Vec<f32>,
+    /// Angle bin of the grasp; the image was rotated by −bin · 22.5°.
+    pub bin: usize,
+    /// Rotated grasp centre in continuous image coordinates (may lie outside the image).
+    pub center: [f32; 2],
+}
+
+impl Sample {
+    /// The pixel (column, row) that holds [`Sample::center`] and the target's peak, or `None`
+    /// when the centre lies outside a `size` × `size` image (the target is then all zero).
+    pub fn center_pixel(&self, size: u32) -> Option<(u32, u32)> {
+        let [x, y] = self.center.map(f32::floor);
+        let inside = |c: f32| (0.0..size as f32).contains(&c);
+        (inside(x) && inside(y)).then_some((x as u32, y as u32))
+    }
+}
+
+/// Builds the sample for an image and its grasp's finger points: the grasp is re-derived from the
+/// fingers, binned, and the image and centre are rotated by −bin · 22.5° so that the grasp is
+/// within half a bin of horizontal.
+///
+/// The target Gaussian is centred on the pixel holding the rotated centre, not on the continuous
+/// point: after a rotation by an odd multiple of 22.5° the centre rarely falls on a pixel centre,
+/// and a Gaussian there would peak anywhere between e^(−1/4) ≈ 0.78 and 1, split over up to four
+/// pixels. Snapping keeps the peak at exactly 1 on one pixel, the pixel that prediction's argmax
+/// reads back.
+pub fn make_sample(image: &RgbImage, grasp_fingers: [[f32; 2]; 2]) -> Sample {
+    let (w, h) = image.dimensions();
+    assert_eq!(w, h, "square images only (got {w}×{h})");
+    let (centre, angle) = grasp_from_fingers(grasp_fingers);
+    let bin = angle_bin(angle);
+    let turn = -bin_angle(bin);
+    let rotated = rotate_image(image, turn);
+    let center = rotate_point(centre, turn, w);
+
+    let plane = (w * h) as usize;
+    let mut input = vec![0.0; 3 * plane];
+    write_chw(&rotated, &mut input);
+
+    let mut sample = Sample {
+        input,
+        target: vec![0.0; plane],
+        bin,
+        center,
+    };
+    if let Some((pu, pv)) = sample.center_pixel(w) {
+        let two_var = 2.0 * TARGET_SIGMA_PX * TARGET_SIGMA_PX;
+        for v in 0..h {
+            for u in 0..w {
+                let du = u as f32 - pu as f32;
+                let dv = v as f32 - pv as f32;
+                sample.target[(v * w + u) as usize] = (-(du * du + dv * dv) / two_var).exp();
+            }
+        }
+    }
+    sample
+}
+
+/// Writes an RGB image into `out` as the network's input: 3 × H × W (CHW), each value in
+/// [0, 1]. The one conversion that training and prediction share, so both see the same numbers.
+pub fn write_chw(image: &RgbImage, out: &mut [f32]) {
+    let plane = (image.width() * image.height()) as usize;
+    assert_eq!(out.len(), 3 * plane, "one CHW image");
+    for (i, pixel) in image.pixels().enumerate() {
+        for (c, &value) in pixel.0.iter().enumerate() {
+            out[c * plane + i] = f32::from(value) / 255.0;
+        }
+    }
+}
+
+/// One label with its image, as stored by `graspmap label`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LabelledImage {
+    /// Object name.
+    pub object: String,
+    /// 1-based index among that object's labels (the k in `<Object>_<k>_rgb.png`).
+    pub k: usize,
+    /// The 128 × 128 RGB observation.
+    pub image: RgbImage,
+    /// The labelled grasp.
+    pub grasp: PixelGrasp,
+}
+
+/// Reads labels.json and every image it lists, in file order. Fails, naming the file, when
+/// labels.json is missing or malformed, or an image is missing, unreadable, or not 128 × 128
+/// 8-bit RGB (images are never converted: a wrong image means the labels are not what the
+/// labelling tool wrote).
+pub fn load_dataset(store: &LabelStore) -> anyhow::Result<Vec<LabelledImage>> {
+    let labels_path = store.labels_path();
+    if !labels_path.exists() {
+        bail!(
+            "{}: no labels (record some with `graspmap label`)",
+            labels_path.display()
+        );
+    }
+    let labels = store.load()?;
+    let mut items = Vec::with_capacity(labels.len());
+    for (object, object_labels) in labels.iter() {
+        for (i, &label) in object_labels.iter().enumerate() {
+            let k = i + 1;
+            let path = store.image_path(object, k);
+            // Deleting one label would shift the k of every later image, so the only safe fixes are
+            // restoring the file or labelling again.
+            let fix = "restore it, or re-record the labels with `graspmap label --force`; \
+                       `graspmap label --check` lists every problem";
+            let decoded = image::open(&path).with_context(|| {
+                format!(
+                    "{}: cannot read the image of {object} label {k} ({fix})",
+                    path.display()
+                )
+            })?;
+            let (width, height, color) = (decoded.width(), decoded.height(), decoded.color());
+            if color != image::ColorType::Rgb8 || (width, height) != (IMAGE_SIZE, IMAGE_SIZE) {
+                bail!(
+                    "{}: image is {width}×{height} {color:?}, expected {IMAGE_SIZE}×{IMAGE_SIZE} \
+                     Rgb8 ({fix})",
+                    path.display()
+                );
+            }
+            // Already 8-bit RGB, so this only unwraps the buffer.
+            let image = decoded.into_rgb8();
+            items.push(LabelledImage {
+                object: object.to_owned(),
+                k,
+                image,
+                grasp: label.into(),
+            });
+        }
+    }
+    Ok(items)
+}
+
+/// Shuffles 0..n with ChaCha8 seeded by `seed` and splits it 90/10 into (train, validation), each
+/// sorted. Validation gets n − ⌊0.9 n⌋ items, as the ref's `int(0.9 * n)` train size, which is at
+/// least 1 for n ≥ 2; a single sample goes to training.
+pub fn split_train_validation(n: usize, seed: u64) -> (Vec<usize>, Vec<usize>) {
+    let mut order: Vec<usize> = (0..n).collect();
+    order.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
+    let n_train = if n < 2 { n } else { n * 9 / 10 };
+    let mut validation = order.split_off(n_train);
+    order.sort_unstable();
+    validation.sort_unstable();
+    (order, validation)
+}
+
+/// The sample for one label: augmented with `augmentation` for training, as labelled for
+/// validation (`None`). An augmentation that moves the grasp centre out of the image (so the target would be
+/// empty) is redrawn, up to [`MAX_AUGMENT_TRIES`] times, before the unaugmented sample is used.
+pub fn training_sample(
+    item: &LabelledImage,
+    augmentation: Option<(&AugmentConfig, &mut ChaCha8Rng)>,
+) -> Sample {
+    let fingers = fingers(item.grasp);
+    if let Some((config, rng)) = augmentation {
+        for _ in 0..MAX_AUGMENT_TRIES {
+            let (image, moved) = augment::augment(&item.image, fingers, config, rng);
+            let sample = make_sample(&image, moved);
+            if sample.center_pixel(image.width()).is_some() {
+                return sample;
+            }
+        }
+    }
+    make_sample(&item.image, fingers)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grasp::BINS;
+    use rand::Rng;
+    use std::path::Path;
+
+    fn fixture() -> LabelStore {
+        LabelStore::new(
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/reference-labels"),
+        )
+    }
+
+    /// (column, row) of the largest value of a row-major `size`-wide plane.
+    fn argmax(plane: &[f32], size: usize) -> (usize, usize) {
+        let i = plane
+            .iter()
+            .enumerate()
+            .fold(0, |best, (i, &x)| if x > plane[best] { i } else { best });
+        (i % size, i / size)
+    }
+
+    /// The input's brightness (sum of channels) as one plane.
+    fn brightness(sample: &Sample) -> Vec<f32> {
+        let plane = sample.target.len();
+        (0..plane)
+            .map(|i| (0..3).map(|c| sample.input[c * plane + i]).sum())
+            .collect()
+    }
+
+    /// Brightness-weighted centroid of the plane within `radius` of `around`.
+    fn centroid(plane: &[f32], size: usize, around: (usize, usize), radius: usize) -> [f32; 2] {
+        let (mut sx, mut sy, mut sw) = (0.0, 0.0, 0.0);
+        for v in around.1.saturating_sub(radius)..(around.1 + radius + 1).min(size) {
+            for u in around.0.saturating_sub(radius)..(around.0 + radius + 1).min(size) {
+                let w = plane[v * size + u];
+                sx += w * (u as f32 + 0.5);
+                sy += w * (v as f32 + 0.5);
+                sw += w;
+            }
+        }
+        [sx / sw, sy / sw]
+    }
+
+    /// Black image with white Gaussian blobs (σ = 1.5 px) at the given points.
+    fn blobs(points: &[[f32; 2]]) -> RgbImage {
+        RgbImage::from_fn(128, 128, |u, v| {
+            let g: f32 = points
+                .iter()
+                .map(|p| {
+                    let dx = u as f32 + 0.5 - p[0];
+                    let dy = v as f32 + 0.5 - p[1];
+                    (-(dx * dx + dy * dy) / 4.5).exp()
+                })
+                .sum();
+            let c = (255.0 * g.min(1.0)).round() as u8;
+            image::Rgb([c, c, c])
+        })
+    }
+
+    #[test]
+    fn angle_bins_round_and_wrap() {
+        for (angle, bin) in [
+            (0.0, 0),
+            (170.0, 0),
+            (11.24, 0),
+            (11.26, 1),
+            (22.5, 1),
+            (-10.0, 0),
+            (-30.0, 7),
+            (180.0, 0),
+            (90.0, 4),
+            (157.5, 7),
+            (168.0, 7),
+            (168.8, 0),
+            (359.0, 0),
+        ] {
+            assert_eq!(angle_bin(angle), bin, "{angle}°");
+        }
+        for bin in 0..BINS {
+            assert_eq!(angle_bin(bin_angle(bin)), bin);
+        }
+    }
+
+    #[test]
+    fn rotation_to_the_bin_makes_grasps_horizontal() {
+        // Fingers drawn as blobs on the image must end up on one row: this checks the image's
+        // rotation sense, not only rotate_point's.
+        for bin in 0..BINS {
+            for (u, v) in [(64, 64), (50, 75), (80, 40)] {
+                let grasp = PixelGrasp {
+                    u,
+                    v,
+                    angle_deg: bin_angle(bin),
+                };
+                let f = fingers(grasp);
+                let sample = make_sample(&blobs(&f), f);
+                assert_eq!(sample.bin, bin);
+                let turned = f.map(|p| rotate_point(p, -bin_angle(bin), 128));
+                assert!((turned[0][1] - turned[1][1]).abs() < 1e-3, "{turned:?}");
+
+                // Locate each finger blob in the input: the brightest pixel, then the other
+                // brightest pixel at least 10 px away.
+                let plane = brightness(&sample);
+                let a = argmax(&plane, 128);
+                let mut masked = plane.clone();
+                for (i, x) in masked.iter_mut().enumerate() {
+                    let (du, dv) = ((i % 128) as f32 - a.0 as f32, (i / 128) as f32 - a.1 as f32);
+                    if du * du + dv * dv < 100.0 {
+                        *x = 0.0;
+                    }
+                }
+                let b = argmax(&masked, 128);
+                let ca = centroid(&plane, 128, a, 3);
+                let cb = centroid(&plane, 128, b, 3);
+                assert!(
+                    (ca[1] - cb[1]).abs() < 0.5,
+                    "bin {bin} at ({u}, {v}): fingers at {ca:?} and {cb:?}"
+                );
+                assert!((ca[0] - cb[0]).abs() > 18.0, "{ca:?} {cb:?}");
+                let (centre, _) = grasp_from_fingers(turned);
+                assert!(
+                    ((ca[1] + cb[1]) / 2.0 - centre[1]).abs() < 0.5,
+                    "bin {bin}: image row {ca:?}/{cb:?}, rotated centre {centre:?}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn target_is_a_unit_gaussian_on_the_rotated_centre_pixel() {
+        for bin in 0..BINS {
+            let grasp = PixelGrasp {
+                u: 57,
+                v: 70,
+                angle_deg: bin_angle(bin),
+            };
+            let f = fingers(grasp);
+            let sample = make_sample(&RgbImage::new(128, 128), f);
+            let expected = rotate_point([57.5, 70.5], -bin_angle(bin), 128);
+            assert!(
+                (sample.center[0] - expected[0]).abs() < 1e-3
+                    && (sample.center[1] - expected[1]).abs() < 1e-3
+            );
+            let (pu, pv) = sample.center_pixel(128).unwrap();
+            assert_eq!((pu, pv), (expected[0] as u32, expected[1] as u32));
+            assert_eq!(sample.target[(pv * 128 + pu) as usize], 1.0);
+            assert_eq!(argmax(&sample.target, 128), (pu as usize, pv as usize));
+            let sum: f32 = sample.target.iter().sum();
+            assert!((sum - 2.0 * std::f32::consts::PI).abs() < 1e-3, "sum {sum}");
+            assert_eq!(sample.input.len(), 3 * 128 * 128);
+            assert_eq!(sample.target.len(), 128 * 128);
+        }
+    }
+
+    #[test]
+    fn input_is_chw_in_unit_range() {
+        let image = RgbImage::from_fn(128, 128, |u, v| image::Rgb([u as u8, v as u8, 255]));
+        let f = fingers(PixelGrasp {
+            u: 64,
+            v: 64,
+            angle_deg: 0.0,
+        });
+        let sample = make_sample(&image, f);
+        let plane = 128 * 128;
+        // Bin 0: no rotation, so channel c of pixel (u, v) sits at c·H·W + v·W + u.
+        assert_eq!(sample.input[5 * 128 + 7], 7.0 / 255.0);
+        assert_eq!(sample.input[plane + 5 * 128 + 7], 5.0 / 255.0);
+        assert_eq!(sample.input[2 * plane + 5 * 128 + 7], 1.0);
+        assert!(sample.input.iter().all(|x| (0.0..=1.0).contains(x)));
+    }
+
+    #[test]
+    fn augmented_samples_keep_the_target_on_the_grasp() {
+        // Property over 250 seeded draws, through the whole training path: a blob at the grasp
+        // centre ends up under the target's peak (both in the rotated frame).
+        let config = AugmentConfig {
+            probability: 1.0,
+            ..AugmentConfig::default()
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut checked = 0;
+        for _ in 0..250 {
+            let grasp = PixelGrasp {
+                u: rng.random_range(30..98),
+                v: rng.random_range(30..98),
+                angle_deg: rng.random_range(0.0..180.0),
+            };
+            let item = LabelledImage {
+                object: "Blob".into(),
+                k: 1,
+                image: blobs(&[[grasp.u as f32 + 0.5, grasp.v as f32 + 0.5]]),
+                grasp,
+            };
+            let sample = training_sample(&item, Some((&config, &mut rng)));
+            let Some(peak) = sample.center_pixel(128) else {
+                continue;
+            };
+            let plane = brightness(&sample);
+            let bright = argmax(&plane, 128);
+            if plane[bright.1 * 128 + bright.0] < 1.5 {
+                continue; // the blob was cut by the border
+            }
+            checked += 1;
+            let d = ((bright.0 as f32 - peak.0 as f32).powi(2)
+                + (bright.1 as f32 - peak.1 as f32).powi(2))
+            .sqrt();
+            assert!(
+                d <= 1.0,
+                "{grasp:?}: brightest input pixel {bright:?}, target peak {peak:?}"
+            );
+        }
+        assert!(checked > 200, "only {checked} samples checked");
+    }
+
+    #[test]
+    fn validation_samples_are_not_augmented() {
+        let item = LabelledImage {
+            object: "Blob".into(),
+            k: 1,
+            image: blobs(&[[40.5, 80.5]]),
+            grasp: PixelGrasp {
+                u: 40,
+                v: 80,
+                angle_deg: 45.0,
+            },
+        };
+        let plain = training_sample(&item, None);
+        assert_eq!(plain, make_sample(&item.image, fingers(item.grasp)));
+        let mut rng = ChaCha8Rng::seed_from_u64(0);
+        let config = AugmentConfig {
+            probability: 1.0,
+            ..AugmentConfig::default()
+        };
+        assert_ne!(training_sample(&item, Some((&config, &mut rng))), plain);
+    }
+
+    #[test]
+    fn augmentations_that_lose_the_grasp_are_redrawn() {
+        // A grasp 3 px from the corner: many draws translate it off the image, yet every
+        // training sample keeps its target peak inside.
+        let corner = LabelledImage {
+            object: "Blob".into(),
+            k: 1,
+            image: blobs(&[[3.5, 3.5]]),
+            grasp: PixelGrasp {
+                u: 3,
+                v: 3,
+                angle_deg: 0.0,
+            },
+        };
+        let config = AugmentConfig {
+            probability: 1.0,
+            ..AugmentConfig::default()
+        };
+        let mut rng = ChaCha8Rng::seed_from_u64(5);
+        for _ in 0..200 {
+            let sample = training_sample(&corner, Some((&config, &mut rng)));
+            assert!(sample.center_pixel(128).is_some(), "{:?}", sample.center);
+        }
+        // Unaugmented, a corner grasp at 45° leaves the image when turned by −45°: the sample
+        // is kept, with an empty target, for the caller to see.
+        let lost = LabelledImage {
+            grasp: PixelGrasp {
+                u: 0,
+                v: 0,
+                angle_deg: 45.0,
+            },
+            ..corner
+        };
+        let sample = training_sample(&lost, None);
+        assert_eq!(sample.center_pixel(128), None, "{:?}", sample.center);
+        assert!(sample.target.iter().all(|&t| t == 0.0));
+    }
+
+    #[test]
+    fn fixture_loads_with_discs_at_the_labels() {
+        let items = load_dataset(&fixture()).unwrap();
+        let names: Vec<(String, usize)> = items.iter().map(|i| (i.object.clone(), i.k)).collect();
+        assert_eq!(
+            names,
+            [
+                ("YcbHammer".to_owned(), 1),
+                ("YcbHammer".to_owned(), 2),
+                ("YcbTomatoSoupCan".to_owned(), 1),
+                ("YcbTomatoSoupCan".to_owned(), 2),
+            ]
+        );
+        assert_eq!(
+            items[1].grasp,
+            PixelGrasp {
+                u: 61,
+                v: 70,
+                angle_deg: 112.5
+            }
+        );
+        for item in &items {
+            // The synthetic images are grey with a red disc on the grasp centre: the red pixels'
+            // centroid is the labelled pixel's centre.
+            let red = |p: &image::Rgb<u8>| p.0[0] > 150 && p.0[1] < 100 && p.0[2] < 100;
+            let (mut n, mut su, mut sv) = (0.0, 0.0, 0.0);
+            for (u, v, p) in item.image.enumerate_pixels() {
+                if red(p) {
+                    n += 1.0;
+                    su += u as f32 + 0.5;
+                    sv += v as f32 + 0.5;
+                }
+            }
+            assert!(n >= 9.0, "{} {}: no red disc", item.object, item.k);
+            let (gu, gv) = (item.grasp.u as f32 + 0.5, item.grasp.v as f32 + 0.5);
+            assert!(
+                (su / n - gu).abs() < 0.5 && (sv / n - gv).abs() < 0.5,
+                "{} {}: disc at ({}, {}), label ({gu}, {gv})",
+                item.object,
+                item.k,
+                su / n,
+                sv / n
+            );
+            assert!(red(item.image.get_pixel(item.grasp.u, item.grasp.v)));
+        }
+    }
+
+    /// A copy of the reference fixture in a temporary directory.
+    fn fixture_copy() -> tempfile::TempDir {
+        let dir = tempfile::tempdir().unwrap();
+        for entry in std::fs::read_dir(fixture().dir()).unwrap() {
+            let entry = entry.unwrap();
+            std::fs::copy(entry.path(), dir.path().join(entry.file_name())).unwrap();
+        }
+        dir
+    }
+
+    #[test]
+    fn missing_and_wrong_images_are_named() {
+        let dir = fixture_copy();
+        let store = LabelStore::new(dir.path());
+        let hammer_2 = store.image_path("YcbHammer", 2);
+        std::fs::remove_file(&hammer_2).unwrap();
+        let err = format!("{:#}", load_dataset(&store).unwrap_err());
+        assert!(err.contains("YcbHammer_2_rgb.png"), "{err}");
+        assert!(err.contains("graspmap label"), "{err}");
+
+        RgbImage::new(64, 64).save(&hammer_2).unwrap();
+        let err = format!("{:#}", load_dataset(&store).unwrap_err());
+        assert!(err.contains("YcbHammer_2_rgb.png"), "{err}");
+        assert!(err.contains("64×64"), "{err}");
+        assert!(err.contains("expected 128×128"), "{err}");
+
+        image::RgbaImage::new(128, 128).save(&hammer_2).unwrap();
+        let err = format!("{:#}", load_dataset(&store).unwrap_err());
+        assert!(
+            err.contains("YcbHammer_2_rgb.png") && err.contains("Rgba8"),
+            "{err}"
+        );
+
+        std::fs::write(&hammer_2, b"not a png").unwrap();
+        let err = format!("{:#}", load_dataset(&store).unwrap_err());
+        assert!(err.contains("YcbHammer_2_rgb.png"), "{err}");
+
+        std::fs::remove_file(store.labels_path()).unwrap();
+        let err = format!("{:#}", load_dataset(&store).unwrap_err());
+        assert!(err.contains("labels.json"), "{err}");
+    }
+
+    #[test]
+    fn split_is_a_seeded_ninety_ten_partition() {
+        for n in [0, 1, 2, 5, 10, 11, 60, 61, 100] {
+            let (train, validation) = split_train_validation(n, 0);
+            let mut all: Vec<usize> = train.iter().chain(&validation).copied().collect();
+            all.sort_unstable();
+            assert_eq!(all, (0..n).collect::<Vec<_>>(), "n = {n}: not a partition");
+            assert_eq!(
+                validation.len(),
+                n - n * 9 / 10 - usize::from(n == 1),
+                "n = {n}"
+            );
+            if n >= 2 {
+                assert!(!validation.is_empty());
+            }
+        }
+        let (train, validation) = split_train_validation(60, 0);
+        assert_eq!((train.len(), validation.len()), (54, 6));
+        assert_eq!(split_train_validation(60, 0), (train, validation.clone()));
+        let others: Vec<_> = (1..6).map(|s| split_train_validation(60, s).1).collect();
+        assert!(
+            others.iter().any(|v| *v != validation),
+            "seed has no effect"
+        );
+    }
+}

@@ -1,0 +1,533 @@
+//! The grasp-label dataset in the reference tool's layout (docs/data.md): `labels.json` plus one RGB image per label.
+//!
+//! `labels.json` maps each object to its labels `[x, y, angle]`, in the order of the images
+//! `<Object>_<k>_rgb.png` (k from 1). Writes go through a temporary file and a rename, image
+//! first, so a killed run leaves a valid `labels.json` whose every image exists.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context;
+use serde::Serialize;
+
+use super::atomic::{save_image_atomic, write_atomic};
+use crate::grasp::{PixelGrasp, IMAGE_SIZE};
+
+/// The labels file name inside the labels directory.
+pub const LABELS_FILE: &str = "labels.json";
+
+/// One labelled grasp: integer pixel and angle in degrees.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Label {
+    /// Column.
+    pub x: u32,
+    /// Row.
+    pub y: u32,
+    /// Image angle in degrees, [0, 180).
+    pub angle: f32,
+}
+
+impl From<PixelGrasp> for Label {
+    fn from(g: PixelGrasp) -> Self {
+        Label {
+            x: g.u,
+            y: g.v,
+            angle: g.angle_deg,
+        }
+    }
+}
+
+impl From<Label> for PixelGrasp {
+    fn from(l: Label) -> Self {
+        PixelGrasp {
+            u: l.x,
+            v: l.y,
+            angle_deg: l.angle,
+        }
+    }
+}
+
+/// All labels, per object, in the order objects were first labelled.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Labels {
+    entries: Vec<(String, Vec<Label>)>,
+}
+
+/// Problems with a labels file or dataset.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LabelError {
+    /// The file is not JSON of the expected shape.
+    #[error("{path}: {message}")]
+    Format { path: PathBuf, message: String },
+}
+
+impl Labels {
+    /// Labels of one object (empty when it has none).
+    pub fn of(&self, object: &str) -> &[Label] {
+        self.entries
+            .iter()
+            .find(|(name, _)| name == object)
+            .map_or(&[], |(_, labels)| labels.as_slice())
+    }
+
+    /// Objects with their labels.
+    pub fn iter(&self) -> impl Iterator<Item = (&str, &[Label])> {
+        self.entries
+            .iter()
+            .filter(|(_, labels)| !labels.is_empty())
+            .map(|(name, labels)| (name.as_str(), labels.as_slice()))
+    }
+
+    /// Total number of labels.
+    pub fn len(&self) -> usize {
+        self.entries.iter().map(|(_, l)| l.len()).sum()
+    }
+
+    /// True when there are no labels.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Puts `order`'s objects first, in that order (giving a place to those without labels yet),
+    /// and any others after them as they were. Objects without labels are not written, so a
+    /// file left by a killed run lists whichever object was labelled first; arranged like this,
+    /// the resumed file's order follows the split, whoever labels first.
+    pub fn arrange(&mut self, order: &[String]) {
+        let mut rest = std::mem::take(&mut self.entries);
+        for object in order {
+            let labels = match rest.iter().position(|(name, _)| name == object) {
+                Some(i) => rest.remove(i).1,
+                None => Vec::new(),
+            };
+            self.entries.push((object.clone(), labels));
+        }
+        self.entries.extend(rest);
+    }
+
+    /// Appends a label for `object`; returns its 1-based index k.
+    pub fn push(&mut self, object: &str, label: Label) -> usize {
+        match self.entries.iter_mut().find(|(name, _)| name == object) {
+            Some((_, labels)) => {
+                labels.push(label);
+                labels.len()
+            }
+            None => {
+                self.entries.push((object.to_owned(), vec![label]));
+                1
+            }
+        }
+    }
+
+    /// Parses `labels.json` text (the reference tool's format; `path` is for messages).
+    pub fn parse(text: &str, path: &Path) -> Result<Self, LabelError> {
+        let err = |message: String| LabelError::Format {
+            path: path.to_owned(),
+            message,
+        };
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| err(format!("not valid JSON: {e}")))?;
+        let map = value
+            .as_object()
+            .ok_or_else(|| err("expected an object {\"<Object>\": [[x, y, angle], ...]}".into()))?;
+        let mut labels = Labels::default();
+        for (object, list) in map {
+            let list = list
+                .as_array()
+                .ok_or_else(|| err(format!("'{object}' must map to a list of [x, y, angle]")))?;
+            let mut parsed = Vec::with_capacity(list.len());
+            for (i, entry) in list.iter().enumerate() {
+                let label = parse_label(entry)
+                    .map_err(|m| err(format!("'{object}' label {}: {m}", i + 1)))?;
+                parsed.push(label);
+            }
+            labels.entries.push((object.clone(), parsed));
+        }
+        Ok(labels)
+    }
+
+    /// The reference format: 4-space indent, integer x/y, float angles.
+    pub fn to_json(&self) -> String {
+        let map: serde_json::Map<String, serde_json::Value> = self
+            .entries
+            .iter()
+            .filter(|(_, labels)| !labels.is_empty())
+            .map(|(object, labels)| {
+                let list = labels
+                    .iter()
+                    .map(|l| serde_json::json!([l.x, l.y, l.angle as f64]))
+                    .collect();
+                (object.clone(), serde_json::Value::Array(list))
+            })
+            .collect();
+        let mut out = Vec::new();
+        let formatter = serde_json::ser::PrettyFormatter::with_indent(b"    ");
+        let mut serializer = serde_json::Serializer::with_formatter(&mut out, formatter);
+        serde_json::Value::Object(map)
+            .serialize(&mut serializer)
+            .expect("serialising JSON values to memory cannot fail");
+        out.push(b'\n');
+        String::from_utf8(out).expect("serde_json writes UTF-8")
+    }
+}
+
+/// One `[x, y, angle]` entry; x and y integers inside the image, the angle normalised.
+fn parse_label(entry: &serde_json::Value) -> Result<Label, String> {
+    let triple = entry
+        .as_array()
+        .filter(|a| a.len() == 3)
+        .ok_or_else(|| format!("must be [x, y, angle], got {entry}"))?;
+    let number = |v: &serde_json::Value, what: &str| {
+        v.as_f64()
+            .ok_or_else(|| format!("{what} = {v} is not a number"))
+    };
+    let grasp = PixelGrasp::checked(
+        number(&triple[0], "x")?,
+        number(&triple[1], "y")?,
+        number(&triple[2], "angle")?,
+    )
+    .map_err(|e| e.to_string())?;
+    Ok(Label::from(grasp))
+}
+
+/// A labels directory on disk.
+#[derive(Debug, Clone)]
+pub struct LabelStore {
+    dir: PathBuf,
+}
+
+impl LabelStore {
+    /// The store in `dir` (usually DATA/labels).
+    pub fn new(dir: impl Into<PathBuf>) -> Self {
+        Self { dir: dir.into() }
+    }
+
+    /// Its directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Path of labels.json.
+    pub fn labels_path(&self) -> PathBuf {
+        self.dir.join(LABELS_FILE)
+    }
+
+    /// Path of the k-th image of an object.
+    pub fn image_path(&self, object: &str, k: usize) -> PathBuf {
+        self.dir.join(format!("{object}_{k}_rgb.png"))
+    }
+
+    /// Deletes temporary files a killed run left behind (they are never read, but would
+    /// otherwise pile up beside the dataset).
+    pub fn remove_stale_temporaries(&self) -> anyhow::Result<()> {
+        let Ok(entries) = std::fs::read_dir(&self.dir) else {
+            return Ok(());
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name();
+            let name = name.to_string_lossy();
+            if name.starts_with('.') && name.contains(".tmp-") {
+                std::fs::remove_file(entry.path())
+                    .with_context(|| format!("removing {}", entry.path().display()))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Reads labels.json; an absent file is an empty dataset.
+    pub fn load(&self) -> anyhow::Result<Labels> {
+        let path = self.labels_path();
+        match std::fs::read_to_string(&path) {
+            Ok(text) => Ok(Labels::parse(&text, &path)?),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(Labels::default()),
+            Err(e) => Err(e).with_context(|| format!("reading {}", path.display())),
+        }
+    }
+
+    /// Appends one label: image first, then labels.json, each atomically.
+    pub fn append(
+        &self,
+        labels: &mut Labels,
+        object: &str,
+        label: Label,
+        image: &image::RgbImage,
+    ) -> anyhow::Result<usize> {
+        let k = labels.of(object).len() + 1;
+        save_image_atomic(image, &self.image_path(object, k))?;
+        labels.push(object, label);
+        write_atomic(&self.labels_path(), labels.to_json().as_bytes())?;
+        Ok(k)
+    }
+
+    /// Removes labels.json and every label image (for `--force`).
+    pub fn clear(&self) -> anyhow::Result<()> {
+        let Ok(entries) = std::fs::read_dir(&self.dir) else {
+            return Ok(());
+        };
+        for entry in entries.flatten() {
+            let name = entry.file_name();
+            let name = name.to_string_lossy();
+            if name == LABELS_FILE || name.ends_with("_rgb.png") || name == PROGRESS_FILE {
+                std::fs::remove_file(entry.path())
+                    .with_context(|| format!("removing {}", entry.path().display()))?;
+            }
+        }
+        Ok(())
+    }
+
+    /// Every problem with the dataset, one line each; empty when it is sound.
+    pub fn check(&self, known_objects: &[String]) -> Vec<String> {
+        let mut problems = Vec::new();
+        let labels_path = self.labels_path();
+        let text = match std::fs::read_to_string(&labels_path) {
+            Ok(text) => text,
+            Err(e) => {
+                return vec![format!("{}: {e}", labels_path.display())];
+            }
+        };
+        let value: serde_json::Value = match serde_json::from_str(&text) {
+            Ok(value) => value,
+            Err(e) => return vec![format!("{}: not valid JSON: {e}", labels_path.display())],
+        };
+        let Some(map) = value.as_object() else {
+            return vec![format!(
+                "{}: expected an object {{\"<Object>\": [[x, y, angle], ...]}}",
+                labels_path.display()
+            )];
+        };
+        let mut expected = std::collections::HashSet::new();
+        for (object, list) in map {
+            if !known_objects.iter().any(|k| k == object) {
+                problems.push(format!(
+                    "{}: unknown object '{object}' (known: {})",
+                    labels_path.display(),
+                    known_objects.join(", ")
+                ));
+            }
+            let Some(list) = list.as_array() else {
+                problems.push(format!(
+                    "{}: '{object}' must map to a list of [x, y, angle]",
+                    labels_path.display()
+                ));
+                continue;
+            };
+            for (i, entry) in list.iter().enumerate() {
+                let k = i + 1;
+                if let Err(message) = parse_label(entry) {
+                    problems.push(format!(
+                        "{}: '{object}' label {k}: {message}",
+                        labels_path.display()
+                    ));
+                }
+                let path = self.image_path(object, k);
+                expected.insert(path.clone());
+                match image::image_dimensions(&path) {
+                    Err(image::ImageError::IoError(e))
+                        if e.kind() == std::io::ErrorKind::NotFound =>
+                    {
+                        problems.push(format!("{}: missing image", path.display()))
+                    }
+                    Err(e) => problems.push(format!("{}: unreadable image: {e}", path.display())),
+                    Ok((w, h)) if (w, h) != (IMAGE_SIZE, IMAGE_SIZE) => problems.push(format!(
+                        "{}: image is {w}×{h}, expected {IMAGE_SIZE}×{IMAGE_SIZE}",
+                        path.display()
+                    )),
+                    Ok(_) => {}
+                }
+            }
+        }
+        if let Ok(entries) = std::fs::read_dir(&self.dir) {
+            let mut extra: Vec<PathBuf> = entries
+                .flatten()
+                .map(|e| e.path())
+                .filter(|p| p.to_string_lossy().ends_with("_rgb.png") && !expected.contains(p))
+                .collect();
+            extra.sort();
+            for path in extra {
+                problems.push(format!(
+                    "{}: extra image not listed in {LABELS_FILE}",
+                    path.display()
+                ));
+            }
+        }
+        problems
+    }
+}
+
+/// Where labelling stands per object, so that a rerun continues from the right round.
+pub const PROGRESS_FILE: &str = "progress.json";
+
+/// Labelling progress, kept beside labels.json.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Progress {
+    /// `graspmap.label-progress/1`.
+    pub schema: String,
+    /// The seed the rounds were drawn with.
+    pub seed: u64,
+    /// The click source, e.g. `scripted`.
+    pub source: String,
+    /// Per object: rounds run and labels stored after them.
+    pub rounds: Vec<ObjectProgress>,
+}
+
+/// One object's progress.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObjectProgress {
+    /// Object name.
+    pub object: String,
+    /// Rounds run, failed ones included.
+    pub rounds: u32,
+    /// Labels stored when the last round was counted.
+    pub labels: u32,
+}
+
+impl Progress {
+    /// The schema name.
+    pub const SCHEMA: &'static str = "graspmap.label-progress/1";
+
+    /// Rounds run and labels recorded for `object`.
+    pub fn entry(&self, object: &str) -> (u32, u32) {
+        self.rounds
+            .iter()
+            .find(|p| p.object == object)
+            .map_or((0, 0), |p| (p.rounds, p.labels))
+    }
+
+    /// Rounds already run for `object`.
+    pub fn rounds_of(&self, object: &str) -> u32 {
+        self.entry(object).0
+    }
+
+    /// Records that `object` has run `rounds` rounds and has `labels` labels.
+    pub fn set_rounds(&mut self, object: &str, rounds: u32, labels: u32) {
+        match self.rounds.iter_mut().find(|p| p.object == object) {
+            Some(p) => {
+                p.rounds = rounds;
+                p.labels = labels;
+            }
+            None => self.rounds.push(ObjectProgress {
+                object: object.to_owned(),
+                rounds,
+                labels,
+            }),
+        }
+    }
+}
+
+impl LabelStore {
+    /// Reads progress.json, if any.
+    pub fn load_progress(&self) -> anyhow::Result<Option<Progress>> {
+        let path = self.dir.join(PROGRESS_FILE);
+        match std::fs::read_to_string(&path) {
+            Ok(text) => Ok(Some(serde_json::from_str(&text).with_context(|| {
+                format!(
+                    "{} is corrupt (delete it or rerun with --force)",
+                    path.display()
+                )
+            })?)),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
+            Err(e) => Err(e).with_context(|| format!("reading {}", path.display())),
+        }
+    }
+
+    /// Writes progress.json atomically.
+    pub fn save_progress(&self, progress: &Progress) -> anyhow::Result<()> {
+        let mut text = serde_json::to_vec_pretty(progress)?;
+        text.write_all(b"\n")?;
+        write_atomic(&self.dir.join(PROGRESS_FILE), &text)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn arranged_labels_follow_the_split_whoever_was_labelled_first() {
+        // A run killed after the brick's first label, before the ball's.
+        let text = r#"{"YcbFoamBrick": [[50, 72, 135.0]], "YcbOther": [[1, 2, 0.0]]}"#;
+        let mut labels = Labels::parse(text, Path::new("labels.json")).unwrap();
+        labels.arrange(&["YcbTennisBall".to_owned(), "YcbFoamBrick".to_owned()]);
+        let ball = Label {
+            x: 83,
+            y: 75,
+            angle: 90.0,
+        };
+        labels.push("YcbTennisBall", ball);
+        let order: Vec<&str> = labels.iter().map(|(name, _)| name).collect();
+        assert_eq!(order, ["YcbTennisBall", "YcbFoamBrick", "YcbOther"]);
+        assert_eq!(labels.of("YcbFoamBrick").len(), 1);
+        let json = labels.to_json();
+        assert!(
+            json.find("YcbTennisBall") < json.find("YcbFoamBrick"),
+            "{json}"
+        );
+    }
+
+    #[test]
+    fn labels_round_trip_through_the_reference_format() {
+        let mut labels = Labels::default();
+        labels.push(
+            "YcbHammer",
+            Label {
+                x: 75,
+                y: 64,
+                angle: 45.0,
+            },
+        );
+        labels.push(
+            "YcbTomatoSoupCan",
+            Label {
+                x: 64,
+                y: 58,
+                angle: 0.0,
+            },
+        );
+        labels.push(
+            "YcbHammer",
+            Label {
+                x: 61,
+                y: 70,
+                angle: 112.5,
+            },
+        );
+        let text = labels.to_json();
+        assert!(
+            text.contains("\n    \"YcbHammer\": [\n        [\n            75,"),
+            "{text}"
+        );
+        assert!(text.contains("45.0"), "angles are floats: {text}");
+        let back = Labels::parse(&text, Path::new("labels.json")).unwrap();
+        assert_eq!(back, labels);
+        assert_eq!(back.of("YcbHammer").len(), 2);
+        assert_eq!(back.len(), 3);
+    }
+
+    #[test]
+    fn bad_values_are_named_in_the_error() {
+        let path = Path::new("labels.json");
+        for (text, needle) in [
+            (r#"{"A": [[128, 3, 0.0]]}"#, "x = 128"),
+            (r#"{"A": [[3, -1, 0.0]]}"#, "y = -1"),
+            (r#"{"A": [[3, 4.5, 0.0]]}"#, "y = 4.5"),
+            (r#"{"A": [[3, 4, "left"]]}"#, "angle"),
+            (r#"{"A": [[3, 4]]}"#, "[x, y, angle]"),
+            (r#"{"A": 3}"#, "list"),
+            (r#"[1, 2]"#, "expected an object"),
+            (r#"{"A": [[3, 4, 0.0]"#, "not valid JSON"),
+        ] {
+            let err = Labels::parse(text, path).unwrap_err().to_string();
+            assert!(err.contains(needle), "{text}: {err}");
+            assert!(err.contains("labels.json"), "{err}");
+        }
+    }
+
+    #[test]
+    fn angles_are_normalised_on_load() {
+        let labels =
+            Labels::parse(r#"{"A": [[1, 2, -22.5], [1, 2, 180.0]]}"#, Path::new("l")).unwrap();
+        assert_eq!(labels.of("A")[0].angle, 157.5);
+        assert_eq!(labels.of("A")[1].angle, 0.0);
+    }
+}

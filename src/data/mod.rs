@@ -1,0 +1,11 @@
+//! Data: the label store in the reference tool's layout, training samples and augmentation.
+//!
+//! Pure core, but for the store's file I/O: it may use `grasp` and `vision`, never the
+//! simulator or tch. Samples leave as plain `f32` arrays that the model layer turns into
+//! tensors. The on-disk formats are in docs/data.md, the sample construction in
+//! docs/learning.md.
+
+pub mod atomic;
+pub mod augment;
+pub mod dataset;
+pub mod labels;

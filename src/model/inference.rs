@@ -1,0 +1,83 @@
+//! The trained model at prediction time: load a checkpoint's weights and score the 8 rotated observations in one batch.
+
+use std::path::Path;
+
+use anyhow::{bail, Context};
+use image::RgbImage;
+use tch::{nn, Device, Kind, Tensor};
+
+use crate::data::dataset::write_chw;
+use crate::grasp::BINS;
+use crate::model::unet::{MiniUNet, Precision};
+use crate::policy::affordance::AffordanceMaps;
+
+/// A MiniUNet with its weights, ready to predict.
+pub struct AffordanceModel {
+    // Owns the weights the network's layers point into.
+    _weights: nn::VarStore,
+    net: MiniUNet,
+    precision: Precision,
+}
+
+impl AffordanceModel {
+    /// Loads the weights of a `.safetensors` checkpoint (as `graspmap train` writes them).
+    pub fn load(path: &Path, precision: Precision) -> anyhow::Result<Self> {
+        if !path.is_file() {
+            bail!(
+                "checkpoint {} not found: run `graspmap train` first, or pass --checkpoint PATH",
+                path.display()
+            );
+        }
+        let tensors = Tensor::read_safetensors(path)
+            .with_context(|| {
+                format!(
+                    "{} is not a readable safetensors checkpoint (retrain, or pass another --checkpoint)",
+                    path.display()
+                )
+            })?
+            .into_iter()
+            .collect();
+        let mut weights = nn::VarStore::new(Device::Cpu);
+        let net = MiniUNet::new(&weights.root());
+        crate::model::train::load_weights(&mut weights, &tensors, path)?;
+        Ok(Self {
+            _weights: weights,
+            net,
+            precision,
+        })
+    }
+
+    /// The arithmetic used.
+    pub fn precision(&self) -> Precision {
+        self.precision
+    }
+
+    /// Affordance (sigmoid of the logits) for the [`BINS`] rotated observations, one batch.
+    pub fn predict(&self, rotated: &[RgbImage]) -> AffordanceMaps {
+        assert_eq!(rotated.len(), BINS, "one observation per bin");
+        let (w, h) = rotated[0].dimensions();
+        assert_eq!(w, h, "square observations");
+        let plane = (w * h) as usize;
+        let mut input = vec![0.0f32; BINS * 3 * plane];
+        for (image, chw) in rotated.iter().zip(input.chunks_exact_mut(3 * plane)) {
+            write_chw(image, chw);
+        }
+        let values = tch::no_grad(|| {
+            let batch = Tensor::from_slice(&input).view([BINS as i64, 3, h as i64, w as i64]);
+            // oneDNN's fp32 convolutions run a fifth faster in channels_last (BENCHMARKS.md,
+            // "Training"); only for inference, since its backward pass is slower there.
+            let batch = match self.precision {
+                Precision::Fp32 => crate::model::unet::channels_last(&batch),
+                Precision::Bf16 => batch,
+            };
+            let scores = self
+                .net
+                .forward_with(&batch, self.precision)
+                .sigmoid()
+                .to_kind(Kind::Float)
+                .flatten(0, -1);
+            Vec::<f32>::try_from(scores).expect("a float tensor converts to Vec<f32>")
+        });
+        AffordanceMaps::new(w, values)
+    }
+}

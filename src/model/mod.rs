@@ -1,0 +1,13 @@
+//! The network: MiniUNet, its training loop and checkpoints, and prediction over 8 rotations.
+//!
+//! This layer owns tch and uses the pure core (`grasp`, `data`); it never sees the simulator.
+//! docs/learning.md describes the network and its training.
+
+pub mod inference;
+pub mod train;
+pub mod unet;
+
+/// Sets how many threads libtorch's operators use.
+pub fn use_threads(threads: u16) {
+    tch::set_num_threads(i32::from(threads));
+}

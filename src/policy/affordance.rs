@@ -1,0 +1,569 @@
+//! Choosing a grasp from 8 rotated affordance maps: argmax, rotation back, failure suppression and the visualisation grid (docs/evaluation.md).
+//!
+//! Map `b` scores the observation rotated by −b · 22.5° (the same rotation as training, in
+//! [`crate::data::augment`]), so a peak there is a horizontal grasp in the rotated image and a grasp at
+//! angle b · 22.5° in the original. Everything here is pure: maps in, choices and images out.
+
+use std::collections::VecDeque;
+
+use image::{Rgb, RgbImage};
+
+use crate::grasp::draw::draw_grasp;
+use crate::grasp::rotate::{rotate_point, unrotate};
+use crate::grasp::{angle_bin, bin_angle, PixelGrasp, BINS};
+
+/// The network's scores for one observation: [`BINS`] maps of `size` × `size`, each in the frame
+/// of the observation rotated by −bin · 22.5°, values in [0, 1].
+#[derive(Debug, Clone, PartialEq)]
+pub struct AffordanceMaps {
+    size: u32,
+    values: Vec<f32>,
+}
+
+impl AffordanceMaps {
+    /// Wraps bin-major, row-major scores; `values.len()` must be `BINS · size²`.
+    pub fn new(size: u32, values: Vec<f32>) -> Self {
+        assert_eq!(
+            values.len(),
+            BINS * (size * size) as usize,
+            "{BINS} maps of {size}×{size} expected"
+        );
+        Self { size, values }
+    }
+
+    /// Side length of each map.
+    pub fn size(&self) -> u32 {
+        self.size
+    }
+
+    /// Score at (column `u`, row `v`) of map `bin`.
+    pub fn get(&self, bin: usize, u: u32, v: u32) -> f32 {
+        self.values[self.index(bin, u, v)]
+    }
+
+    /// One map, row-major.
+    pub fn map(&self, bin: usize) -> &[f32] {
+        let plane = (self.size * self.size) as usize;
+        &self.values[bin * plane..(bin + 1) * plane]
+    }
+
+    /// Zeroes the scores of actions that are not allowed (`allowed` in the same layout).
+    pub fn restrict(&mut self, allowed: &[bool]) {
+        assert_eq!(allowed.len(), self.values.len(), "one flag per score");
+        for (value, &ok) in self.values.iter_mut().zip(allowed) {
+            if !ok {
+                *value = 0.0;
+            }
+        }
+    }
+
+    /// The action of an original-image grasp: its angle's bin, its centre in that bin's map and
+    /// the score there (0 where the rotation leaves the map).
+    pub fn choice_of(&self, grasp: PixelGrasp) -> Choice {
+        let (bin, [x, y]) = self.map_position(grasp);
+        let clip = |c: f32| (c.floor().max(0.0) as u32).min(self.size - 1);
+        Choice {
+            bin,
+            rotated: [clip(x), clip(y)],
+            grasp,
+            score: self.score_at(grasp),
+        }
+    }
+
+    /// The score of an original-image grasp: its angle's map at its centre carried into that
+    /// map's frame; 0 where the rotation leaves the map.
+    pub fn score_at(&self, grasp: PixelGrasp) -> f32 {
+        let (bin, [x, y]) = self.map_position(grasp);
+        let inside = |c: f32| (0.0..self.size as f32).contains(&c);
+        if inside(x) && inside(y) {
+            self.get(bin, x as u32, y as u32)
+        } else {
+            0.0
+        }
+    }
+
+    /// The bin of a grasp's angle and its centre carried into that bin's map frame.
+    fn map_position(&self, grasp: PixelGrasp) -> (usize, [f32; 2]) {
+        let bin = angle_bin(grasp.angle_deg);
+        let centre = [grasp.u as f32 + 0.5, grasp.v as f32 + 0.5];
+        (bin, rotate_point(centre, -bin_angle(bin), self.size))
+    }
+
+    fn index(&self, bin: usize, u: u32, v: u32) -> usize {
+        (bin * self.size as usize + v as usize) * self.size as usize + u as usize
+    }
+
+    /// The best (bin, row, column), first in that order on ties (like argmax over the flattened
+    /// batch), turned into a grasp in the original image.
+    pub fn choose(&self) -> Choice {
+        let (best, score) =
+            self.values
+                .iter()
+                .copied()
+                .enumerate()
+                .fold((0, f32::NEG_INFINITY), |best, (i, s)| {
+                    if s > best.1 {
+                        (i, s)
+                    } else {
+                        best
+                    }
+                });
+        self.choice_at(best, score)
+    }
+
+    /// The `count` best actions with a positive score, best first, ties in the order
+    /// [`AffordanceMaps::choose`] breaks them.
+    pub fn ranked(&self, count: usize) -> Vec<Choice> {
+        let by_score =
+            |a: &usize, b: &usize| self.values[*b].total_cmp(&self.values[*a]).then(a.cmp(b));
+        let mut order: Vec<usize> = (0..self.values.len())
+            .filter(|&i| self.values[i] > 0.0)
+            .collect();
+        if order.len() > count {
+            order.select_nth_unstable_by(count, by_score);
+            order.truncate(count);
+        }
+        order.sort_unstable_by(by_score);
+        order
+            .into_iter()
+            .map(|i| self.choice_at(i, self.values[i]))
+            .collect()
+    }
+
+    /// The action at a flat index into `values`.
+    fn choice_at(&self, index: usize, score: f32) -> Choice {
+        let plane = (self.size * self.size) as usize;
+        let bin = index / plane;
+        let (v, u) = (
+            (index % plane) as u32 / self.size,
+            (index % plane) as u32 % self.size,
+        );
+        Choice {
+            bin,
+            rotated: [u, v],
+            grasp: unrotate(bin, u, v, self.size),
+            score: score.max(0.0),
+        }
+    }
+}
+
+/// A chosen action.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Choice {
+    /// Angle bin (the map it came from).
+    pub bin: usize,
+    /// Pixel [column, row] in the rotated map.
+    pub rotated: [u32; 2],
+    /// The grasp in the original image: the map pixel rotated back (or, when `eval`'s centring
+    /// moved it, the executed grasp, and `bin`, `rotated` and `score` are its own).
+    pub grasp: PixelGrasp,
+    /// Affordance at the chosen pixel (after any suppression).
+    pub score: f32,
+}
+
+/// How failure suppression lowers the maps around past actions.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct SuppressionConfig {
+    /// Actions remembered (the user's `--n_past_action`); 0 turns suppression off.
+    pub remember: usize,
+    /// Standard deviation of the subtracted Gaussian, in pixels.
+    pub sigma_px: f32,
+    /// Lower the rotations within this many bins of the past action's (circularly, 22.5° each):
+    /// 0 = its own rotation only, 4 = all 8.
+    pub rotation_reach: usize,
+    /// Whether successful actions enter the memory too.
+    pub remember_successes: bool,
+}
+
+impl Default for SuppressionConfig {
+    /// The measured choice (BENCHMARKS.md, "Failure suppression"): σ = 4 px, the failed
+    /// rotation only, failures only; `remember` 0 (off) until the user asks.
+    fn default() -> Self {
+        Self {
+            remember: 0,
+            sigma_px: 4.0,
+            rotation_reach: 0,
+            remember_successes: false,
+        }
+    }
+}
+
+/// The last N actions and the map lowering they cause.
+#[derive(Debug, Clone)]
+pub struct Suppression {
+    config: SuppressionConfig,
+    past: VecDeque<Choice>,
+}
+
+impl Suppression {
+    /// An empty memory.
+    pub fn new(config: SuppressionConfig) -> Self {
+        Self {
+            config,
+            past: VecDeque::new(),
+        }
+    }
+
+    /// Remembers an executed action (a no-op for successes unless configured, and when off).
+    pub fn record(&mut self, choice: Choice, success: bool) {
+        if self.config.remember == 0 || (success && !self.config.remember_successes) {
+            return;
+        }
+        if self.past.len() == self.config.remember {
+            self.past.pop_front();
+        }
+        self.past.push_back(choice);
+    }
+
+    /// The remembered actions, oldest first.
+    pub fn past(&self) -> impl Iterator<Item = &Choice> {
+        self.past.iter()
+    }
+
+    /// Subtracts a unit-peak Gaussian around each remembered action and clips to [0, 1]. The
+    /// action's original-image grasp centre is carried into each rotated frame, so all bins see
+    /// the same spot on the object.
+    pub fn apply(&self, maps: &mut AffordanceMaps) {
+        let size = maps.size;
+        let two_var = 2.0 * self.config.sigma_px * self.config.sigma_px;
+        let reach = (3.0 * self.config.sigma_px).ceil() as i64;
+        for past in &self.past {
+            let centre = [past.grasp.u as f32 + 0.5, past.grasp.v as f32 + 0.5];
+            for bin in 0..BINS {
+                let apart = (bin + BINS - past.bin) % BINS;
+                if apart.min(BINS - apart) > self.config.rotation_reach {
+                    continue;
+                }
+                let [cx, cy] = rotate_point(centre, -bin_angle(bin), size);
+                let (iu, iv) = (cx.floor() as i64, cy.floor() as i64);
+                for v in (iv - reach).max(0)..=(iv + reach).min(size as i64 - 1) {
+                    for u in (iu - reach).max(0)..=(iu + reach).min(size as i64 - 1) {
+                        let du = u as f32 + 0.5 - cx;
+                        let dv = v as f32 + 0.5 - cy;
+                        let i = maps.index(bin, u as u32, v as u32);
+                        let lowered = maps.values[i] - (-(du * du + dv * dv) / two_var).exp();
+                        maps.values[i] = lowered.clamp(0.0, 1.0);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The ref's 512 × 512 grid: for each bin, the rotated observation beside its (suppressed) map
+/// in viridis, two pairs per row, four rows; the chosen grasp is drawn, horizontal, on both
+/// panels of its bin, which also gets a white frame.
+pub fn visualisation(rotated: &[RgbImage], maps: &AffordanceMaps, choice: &Choice) -> RgbImage {
+    let size = maps.size;
+    let mut grid = RgbImage::new(4 * size, (BINS as u32).div_ceil(2) * size);
+    for (bin, observation) in rotated.iter().enumerate().take(BINS) {
+        let x0 = (bin as u32 % 2) * 2 * size;
+        let y0 = (bin as u32 / 2) * size;
+        let mut rgb = observation.clone();
+        let mut heat = RgbImage::from_fn(size, size, |u, v| {
+            Rgb(crate::vision::colormap::viridis(maps.get(bin, u, v)))
+        });
+        if bin == choice.bin {
+            let g = PixelGrasp {
+                u: choice.rotated[0],
+                v: choice.rotated[1],
+                angle_deg: 0.0,
+            };
+            for panel in [&mut rgb, &mut heat] {
+                draw_grasp(panel, &g);
+                imageproc::drawing::draw_hollow_rect_mut(
+                    panel,
+                    imageproc::rect::Rect::at(0, 0).of_size(size, size),
+                    Rgb([255, 255, 255]),
+                );
+            }
+        }
+        image::imageops::replace(&mut grid, &rgb, i64::from(x0), i64::from(y0));
+        image::imageops::replace(&mut grid, &heat, i64::from(x0 + size), i64::from(y0));
+    }
+    grid
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::grasp::rotate::rotated_observations;
+
+    const SIZE: u32 = 128;
+
+    fn empty_maps() -> AffordanceMaps {
+        AffordanceMaps::new(SIZE, vec![0.0; BINS * (SIZE * SIZE) as usize])
+    }
+
+    #[test]
+    fn a_peak_in_each_rotation_comes_back_at_its_original_pixel_and_angle() {
+        // Put a grasp at a known original pixel, carry it into bin k's frame the way the dataset
+        // does (continuous centre rotated by −k·22.5°, the pixel holding it), plant the peak
+        // there, and expect prediction to return the original pixel within 1 px and angle k·22.5°.
+        for &(x, y) in &[(64u32, 64u32), (30, 90), (100, 20), (10, 10), (120, 70)] {
+            for bin in 0..BINS {
+                let [rx, ry] =
+                    rotate_point([x as f32 + 0.5, y as f32 + 0.5], -bin_angle(bin), SIZE);
+                if !(0.0..SIZE as f32).contains(&rx) || !(0.0..SIZE as f32).contains(&ry) {
+                    continue; // rotated out of the image: the network cannot score it there
+                }
+                let mut maps = empty_maps();
+                let i = maps.index(bin, rx as u32, ry as u32);
+                maps.values[i] = 0.9;
+                let choice = maps.choose();
+                assert_eq!(choice.bin, bin);
+                assert_eq!(choice.rotated, [rx as u32, ry as u32]);
+                assert_eq!(choice.grasp.angle_deg, bin as f32 * 22.5);
+                let du = choice.grasp.u as i64 - x as i64;
+                let dv = choice.grasp.v as i64 - y as i64;
+                assert!(
+                    du.abs() <= 1 && dv.abs() <= 1,
+                    "bin {bin}: ({x}, {y}) came back as ({}, {})",
+                    choice.grasp.u,
+                    choice.grasp.v
+                );
+                assert!((choice.score - 0.9).abs() < 1e-6);
+            }
+        }
+    }
+
+    #[test]
+    fn the_round_trip_matches_the_training_rotation_of_a_labelled_grasp() {
+        // make_sample puts the target peak where prediction must look; unrotating it must give
+        // the label back.
+        let image = RgbImage::new(SIZE, SIZE);
+        for bin in 0..BINS {
+            let label = PixelGrasp {
+                u: 40 + bin as u32 * 5,
+                v: 70,
+                angle_deg: bin_angle(bin),
+            };
+            let sample = crate::data::dataset::make_sample(&image, crate::grasp::fingers(label));
+            let (pu, pv) = sample.center_pixel(SIZE).expect("inside");
+            let back = unrotate(sample.bin, pu, pv, SIZE);
+            assert!(
+                (back.u as i64 - label.u as i64).abs() <= 1,
+                "{back:?} vs {label:?}"
+            );
+            assert!(
+                (back.v as i64 - label.v as i64).abs() <= 1,
+                "{back:?} vs {label:?}"
+            );
+            assert_eq!(back.angle_deg, label.angle_deg);
+        }
+    }
+
+    #[test]
+    fn score_at_reads_a_grasp_from_its_angle_map() {
+        for bin in 0..BINS {
+            let grasp = PixelGrasp {
+                u: 50,
+                v: 70,
+                angle_deg: bin_angle(bin),
+            };
+            let [rx, ry] = rotate_point([50.5, 70.5], -bin_angle(bin), SIZE);
+            let mut maps = empty_maps();
+            let i = maps.index(bin, rx as u32, ry as u32);
+            maps.values[i] = 0.7;
+            assert_eq!(maps.score_at(grasp), 0.7, "bin {bin}");
+            let other = PixelGrasp {
+                angle_deg: bin_angle((bin + 1) % BINS),
+                ..grasp
+            };
+            assert_eq!(maps.score_at(other), 0.0, "bin {bin}");
+        }
+    }
+
+    #[test]
+    fn choice_of_a_grasp_is_the_action_that_unrotates_to_it() {
+        let mut maps = empty_maps();
+        let i = maps.index(6, 30, 90);
+        maps.values[i] = 0.8;
+        let peak = maps.choose();
+        let back = maps.choice_of(peak.grasp);
+        assert_eq!((back.bin, back.grasp), (peak.bin, peak.grasp));
+        assert!(back.rotated[0].abs_diff(30) <= 1 && back.rotated[1].abs_diff(90) <= 1);
+        assert_eq!(back.score, maps.get(6, back.rotated[0], back.rotated[1]));
+    }
+
+    #[test]
+    fn corner_pixels_are_clipped_into_the_image() {
+        for bin in 0..BINS {
+            for (u, v) in [(0, 0), (127, 0), (0, 127), (127, 127)] {
+                let g = unrotate(bin, u, v, SIZE);
+                assert!(g.u < SIZE && g.v < SIZE);
+            }
+        }
+    }
+
+    #[test]
+    fn ties_go_to_the_first_bin_row_and_column() {
+        let mut maps = empty_maps();
+        for (bin, u, v) in [(3, 5, 9), (3, 6, 8), (5, 1, 1)] {
+            let i = maps.index(bin, u, v);
+            maps.values[i] = 1.0;
+        }
+        let choice = maps.choose();
+        assert_eq!((choice.bin, choice.rotated), (3, [6, 8]));
+    }
+
+    /// Maps of one static scene with three bumps of different heights, drawn where each rotated
+    /// frame sees them (so every bin agrees on where the bumps are in the original image).
+    fn bumpy_maps() -> AffordanceMaps {
+        let mut maps = empty_maps();
+        for bin in 0..BINS {
+            for v in 0..SIZE {
+                for u in 0..SIZE {
+                    let [x, y] =
+                        rotate_point([u as f32 + 0.5, v as f32 + 0.5], bin_angle(bin), SIZE);
+                    let bump = |cx: f32, cy: f32, h: f32| {
+                        h * (-((x - cx - 0.5).powi(2) + (y - cy - 0.5).powi(2)) / 50.0).exp()
+                    };
+                    let i = maps.index(bin, u, v);
+                    let tilt = bin as f32 * 0.01;
+                    maps.values[i] = bump(40.0, 60.0, 0.9 - tilt)
+                        .max(bump(80.0, 70.0, 0.8 - tilt))
+                        .max(bump(64.0, 30.0, 0.7 - tilt));
+                }
+            }
+        }
+        maps
+    }
+
+    #[test]
+    fn with_one_remembered_action_the_same_pixel_is_never_chosen_twice_in_a_row() {
+        for rotation_reach in [0, 1, 4] {
+            let raw = bumpy_maps();
+            let mut memory = Suppression::new(SuppressionConfig {
+                remember: 1,
+                rotation_reach,
+                ..SuppressionConfig::default()
+            });
+            let mut previous: Option<Choice> = None;
+            for _ in 0..20 {
+                let mut maps = raw.clone();
+                memory.apply(&mut maps);
+                let choice = maps.choose();
+                if let Some(p) = previous {
+                    assert!(
+                        (p.bin, p.rotated) != (choice.bin, choice.rotated),
+                        "rotation_reach {rotation_reach}: chose {choice:?} twice in a row"
+                    );
+                }
+                memory.record(choice, false);
+                previous = Some(choice);
+            }
+        }
+    }
+
+    #[test]
+    fn suppression_moves_the_choice_to_the_next_best_spot_and_forgets_old_actions() {
+        let raw = bumpy_maps();
+        let mut memory = Suppression::new(SuppressionConfig {
+            remember: 2,
+            rotation_reach: 4,
+            ..SuppressionConfig::default()
+        });
+        let first = raw.choose();
+        assert_eq!((first.grasp.u, first.grasp.v), (40, 60));
+        memory.record(first, false);
+        let mut maps = raw.clone();
+        memory.apply(&mut maps);
+        let second = maps.choose();
+        assert_eq!((second.grasp.u, second.grasp.v), (80, 70));
+        memory.record(second, false);
+        let mut maps = raw.clone();
+        memory.apply(&mut maps);
+        assert_eq!((maps.choose().grasp.u, maps.choose().grasp.v), (64, 30));
+        assert!(maps.values.iter().all(|v| (0.0..=1.0).contains(v)));
+        // A third failure pushes the first out of the two-action memory.
+        memory.record(maps.choose(), false);
+        let mut maps = raw.clone();
+        memory.apply(&mut maps);
+        assert_eq!((maps.choose().grasp.u, maps.choose().grasp.v), (40, 60));
+    }
+
+    #[test]
+    fn ranked_lists_the_best_positive_actions_first_starting_with_the_argmax() {
+        let maps = bumpy_maps();
+        let ranked = maps.ranked(50);
+        assert_eq!(ranked.len(), 50);
+        assert_eq!(ranked[0], maps.choose());
+        assert!(ranked.windows(2).all(|w| w[0].score >= w[1].score));
+        for c in &ranked {
+            assert_eq!(maps.get(c.bin, c.rotated[0], c.rotated[1]), c.score);
+            assert_eq!(maps.choice_of(c.grasp).bin, c.bin);
+        }
+        // Only positive scores are actions worth trying.
+        let mut sparse = empty_maps();
+        for (bin, u, v, value) in [(2, 10, 20, 0.3), (5, 100, 7, 0.9), (7, 64, 64, 0.3)] {
+            let i = sparse.index(bin, u, v);
+            sparse.values[i] = value;
+        }
+        let order: Vec<(usize, [u32; 2])> = sparse
+            .ranked(10)
+            .iter()
+            .map(|c| (c.bin, c.rotated))
+            .collect();
+        assert_eq!(order, [(5, [100, 7]), (2, [10, 20]), (7, [64, 64])]);
+    }
+
+    #[test]
+    fn successes_are_forgotten_unless_configured_and_zero_means_off() {
+        let choice = bumpy_maps().choose();
+        let mut off = Suppression::new(SuppressionConfig::default());
+        off.record(choice, false);
+        assert_eq!(off.past().count(), 0);
+        let mut failures = Suppression::new(SuppressionConfig {
+            remember: 4,
+            ..SuppressionConfig::default()
+        });
+        failures.record(choice, true);
+        assert_eq!(failures.past().count(), 0);
+        let mut all = Suppression::new(SuppressionConfig {
+            remember: 4,
+            remember_successes: true,
+            ..SuppressionConfig::default()
+        });
+        all.record(choice, true);
+        assert_eq!(all.past().count(), 1);
+    }
+
+    #[test]
+    fn suppression_reaches_only_the_nearby_rotations() {
+        let raw = bumpy_maps();
+        let first = raw.choose();
+        assert_eq!(first.bin, 0, "the tilt favours bin 0");
+        for (reach, lowered) in [(0, vec![0]), (1, vec![0, 1, 7]), (4, (0..BINS).collect())] {
+            let mut memory = Suppression::new(SuppressionConfig {
+                remember: 1,
+                rotation_reach: reach,
+                ..SuppressionConfig::default()
+            });
+            memory.record(first, false);
+            let mut maps = raw.clone();
+            memory.apply(&mut maps);
+            for bin in 0..BINS {
+                let changed = maps.map(bin) != raw.map(bin);
+                assert_eq!(changed, lowered.contains(&bin), "reach {reach}, bin {bin}");
+            }
+        }
+    }
+
+    #[test]
+    fn the_grid_is_512_square_with_the_map_beside_each_rotation() {
+        let image = RgbImage::from_pixel(SIZE, SIZE, Rgb([200, 10, 10]));
+        let rotated = rotated_observations(&image);
+        let maps = bumpy_maps();
+        let choice = maps.choose();
+        let grid = visualisation(&rotated, &maps, &choice);
+        assert_eq!(grid.dimensions(), (512, 512));
+        // Bin 3 sits in row 1, right half: its observation at x 256.., its map at x 384...
+        assert_eq!(
+            grid.get_pixel(256 + 64, 128 + 64).0,
+            rotated[3].get_pixel(64, 64).0
+        );
+        let expected = crate::vision::colormap::viridis(maps.get(3, 10, 5));
+        assert_eq!(grid.get_pixel(384 + 10, 128 + 5).0, expected);
+    }
+}

@@ -1,0 +1,37 @@
+//! Helpers shared by the end-to-end test files: run the binary, check one-line user errors.
+
+use std::process::{Command, Output};
+
+/// Runs the built `graspmap` with `args`, without any inherited log filter.
+pub fn graspmap(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_graspmap"))
+        .args(args)
+        .env_remove("GRASPMAP_LOG")
+        .output()
+        .expect("running graspmap")
+}
+
+/// Asserts success, showing stderr when it fails.
+pub fn assert_ok(output: &Output) {
+    assert!(
+        output.status.success(),
+        "status {:?}, stderr: {}",
+        output.status.code(),
+        String::from_utf8_lossy(&output.stderr)
+    );
+}
+
+/// Asserts a user error: exit status 2 and a single stderr line that mentions every `needles`.
+pub fn assert_user_error(output: &Output, needles: &[&str]) {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(2), "stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "panic: {stderr}");
+    assert_eq!(
+        stderr.trim_end().lines().count(),
+        1,
+        "not one line: {stderr}"
+    );
+    for needle in needles {
+        assert!(stderr.contains(needle), "{needle:?} missing from: {stderr}");
+    }
+}

@@ -1,0 +1,307 @@
+//! `graspmap eval` and `predict` end to end: reports, visualisations, determinism and clear errors.
+
+use std::path::{Path, PathBuf};
+
+use crate::common::{assert_ok, assert_user_error, graspmap};
+use serde_json::Value;
+
+/// A data directory with an untrained (seeded) MiniUNet checkpoint and a split of one training
+/// and one test object, so that a whole task is 3 attempts.
+struct Setup {
+    dir: tempfile::TempDir,
+}
+
+impl Setup {
+    fn new() -> Self {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("split.json"),
+            r#"{"train": ["YcbTomatoSoupCan"], "test": ["YcbFoamBrick"]}"#,
+        )
+        .unwrap();
+        tch::manual_seed(7);
+        let vs = tch::nn::VarStore::new(tch::Device::Cpu);
+        let _net = graspmap::model::unet::MiniUNet::new(&vs.root());
+        let named: Vec<(String, tch::Tensor)> = vs.variables().into_iter().collect();
+        std::fs::create_dir_all(dir.path().join("affordance")).unwrap();
+        tch::Tensor::write_safetensors(&named, dir.path().join("affordance/best.safetensors"))
+            .unwrap();
+        Self { dir }
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.dir.path().join(name)
+    }
+
+    /// Runs graspmap with this data directory and split.
+    fn run(&self, args: &[&str]) -> std::process::Output {
+        let data = self.dir.path().to_str().unwrap().to_owned();
+        let split = self.path("split.json").to_str().unwrap().to_owned();
+        let mut all = vec!["--data", &data, "--split", &split, "--threads", "2"];
+        all.extend_from_slice(args);
+        graspmap(&all)
+    }
+
+    /// The oracle emptying the default scene in at most `attempts` attempts, plus `extra`.
+    fn oracle_empty_bin(&self, attempts: u32, extra: &[&str]) -> std::process::Output {
+        let attempts = attempts.to_string();
+        let mut args = vec![
+            "eval",
+            "--task",
+            "empty_bin",
+            "--policy",
+            "oracle",
+            "--max-attempts",
+            &attempts,
+        ];
+        args.extend_from_slice(extra);
+        self.run(&args)
+    }
+}
+
+fn read_json(path: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// What an evaluation decided and how each attempt ended, without the timings.
+fn decisions(report: &Value) -> Vec<String> {
+    report["results"]["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|run| run["attempts"].as_array().unwrap().clone())
+        .map(|a| {
+            format!(
+                "{} {} {} {}",
+                a["drop_seed"], a["grasp"], a["reason"], a["held"]
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
+    let setup = Setup::new();
+    let json = setup.path("eval.json");
+    let out = setup.run(&["eval", "--task", "train", "--json", json.to_str().unwrap()]);
+    assert_ok(&out);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("YcbTomatoSoupCan"), "{stdout}");
+    assert!(stdout.contains("success rate: "), "{stdout}");
+    assert!(stdout.contains("95 % CI"), "{stdout}");
+
+    let report = read_json(&json);
+    assert_eq!(report["schema"], "graspmap.eval/1");
+    assert!(report["git_commit"].is_string());
+    assert_eq!(report["config"]["seeds"], serde_json::json!([0]));
+    assert_eq!(report["config"]["suppression"]["remember"], 0);
+    let results = &report["results"];
+    assert_eq!(results["task"], "train");
+    assert_eq!(results["policy"], "model");
+    assert_eq!(results["success"]["trials"], 3);
+    let rate = &results["success"];
+    assert!(rate["wilson_low"].as_f64().unwrap() <= rate["rate"].as_f64().unwrap());
+    assert!(rate["wilson_high"].as_f64().unwrap() >= rate["rate"].as_f64().unwrap());
+    assert_eq!(results["per_object"][0]["object"], "YcbTomatoSoupCan");
+    assert_eq!(results["per_object"][0]["attempts"], 3);
+    let attempts = results["runs"][0]["attempts"].as_array().unwrap();
+    // Attempt a of object 0 drops with seed + 100·0 + a + 10000 (the reference's rule).
+    let seeds: Vec<u64> = attempts
+        .iter()
+        .map(|a| a["drop_seed"].as_u64().unwrap())
+        .collect();
+    assert_eq!(seeds, [10000, 10001, 10002]);
+    for a in attempts {
+        let angle = a["grasp"]["angle_deg"].as_f64().unwrap();
+        assert_eq!(angle % 22.5, 0.0, "model angles are bin angles: {a}");
+        assert_eq!(a["choice"]["bin"].as_f64().unwrap() * 22.5, angle);
+        for part in ["wall", "sim", "render", "network"] {
+            assert!(a["timing"][part].as_f64().unwrap() >= 0.0, "{part}: {a}");
+        }
+        assert!(a["timing"]["network"].as_f64().unwrap() > 0.0);
+    }
+    for a in 0..3 {
+        let vis = setup.path(&format!(
+            "affordance/eval_pick_training_vis/YcbTomatoSoupCan_{a}.png"
+        ));
+        let image = image::open(&vis).unwrap();
+        assert_eq!((image.width(), image.height()), (512, 512));
+    }
+
+    // Same seed, same machine: the same grasps and outcomes.
+    let again = setup.path("again.json");
+    assert_ok(&setup.run(&["eval", "--task", "train", "--json", again.to_str().unwrap()]));
+    assert_eq!(decisions(&report), decisions(&read_json(&again)));
+    assert_eq!(report["config"]["centring"], false);
+    assert_eq!(report["config"]["verify_top"], 200);
+
+    // Centring reports the executed grasp as its own action: angle, bin and map pixel agree.
+    let centred = setup.path("centred.json");
+    let args = ["eval", "--task", "train", "--centring", "--json"];
+    assert_ok(&setup.run(&[&args[..], &[centred.to_str().unwrap()]].concat()));
+    let centred = read_json(&centred);
+    assert_eq!(centred["config"]["centring"], true);
+    for a in centred["results"]["runs"][0]["attempts"]
+        .as_array()
+        .unwrap()
+    {
+        let angle = a["grasp"]["angle_deg"].as_f64().unwrap();
+        assert_eq!(a["choice"]["bin"].as_f64().unwrap() * 22.5, angle, "{a}");
+        assert_eq!(a["choice"]["grasp"], a["grasp"], "{a}");
+    }
+}
+
+#[test]
+fn seeds_aggregate_and_the_random_policy_needs_no_checkpoint() {
+    let setup = Setup::new();
+    std::fs::remove_file(setup.path("affordance/best.safetensors")).unwrap();
+    let json = setup.path("eval.json");
+    let out = setup.run(&[
+        "eval",
+        "--task",
+        "test",
+        "--policy",
+        "random",
+        "--seeds",
+        "0,1000",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_ok(&out);
+    let results = read_json(&json)["results"].clone();
+    assert_eq!(results["seeds"], serde_json::json!([0, 1000]));
+    assert_eq!(results["success"]["trials"], 6);
+    assert_eq!(results["per_object"][0]["object"], "YcbFoamBrick");
+    assert_eq!(results["runs"][1]["attempts"][0]["drop_seed"], 11000);
+    assert!(results["runs"][0]["attempts"][0]["vis"].is_null());
+}
+
+#[test]
+fn empty_bin_counts_moved_left_and_lost_every_attempt() {
+    let setup = Setup::new();
+    let json = setup.path("eval.json");
+    let out = setup.oracle_empty_bin(2, &["--json", json.to_str().unwrap()]);
+    assert_ok(&out);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let progress: Vec<&str> = stdout
+        .lines()
+        .filter(|l| l.ends_with("objects moved"))
+        .collect();
+    assert!(!progress.is_empty() && progress.len() <= 2, "{stdout}");
+    assert!(
+        progress.iter().all(|l| l.contains("/2 objects moved")),
+        "{stdout}"
+    );
+    assert!(stdout.contains("objects left in the bin."), "{stdout}");
+    let report = read_json(&json);
+    assert_eq!(report["config"]["seeds"], serde_json::json!([2]));
+    let bin = &report["results"]["runs"][0]["bin"];
+    let total = bin["moved"].as_u64().unwrap()
+        + bin["left"].as_u64().unwrap()
+        + bin["lost"].as_u64().unwrap();
+    assert_eq!(total, 2);
+    let last = report["results"]["runs"][0]["attempts"]
+        .as_array()
+        .unwrap()
+        .last()
+        .unwrap()
+        .clone();
+    assert_eq!(last["moved"], bin["moved"]);
+    assert_eq!(report["results"]["moved"]["count"], 1);
+}
+
+#[test]
+fn predict_prints_a_grasp_and_writes_the_grid() {
+    let setup = Setup::new();
+    let scene = setup.path("scene.png");
+    assert_ok(&graspmap(&[
+        "scene",
+        "--objects",
+        "YcbTomatoSoupCan",
+        "--seed",
+        "3",
+        "--out",
+        scene.to_str().unwrap(),
+    ]));
+    let json = setup.path("predict.json");
+    let vis = setup.path("grid.png");
+    let out = setup.run(&[
+        "predict",
+        "--image",
+        scene.to_str().unwrap(),
+        "--out",
+        vis.to_str().unwrap(),
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_ok(&out);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("grasp x "));
+    let report = read_json(&json);
+    assert_eq!(report["schema"], "graspmap.predict/1");
+    let results = &report["results"];
+    assert!(results["x"].as_u64().unwrap() < 128 && results["y"].as_u64().unwrap() < 128);
+    assert_eq!(results["angle"].as_f64().unwrap() % 22.5, 0.0);
+    let score = results["score"].as_f64().unwrap();
+    assert!((0.0..=1.0).contains(&score));
+    assert_eq!(image::open(&vis).unwrap().width(), 512);
+}
+
+#[test]
+fn bad_inputs_are_one_line_errors_with_exit_status_2() {
+    let setup = Setup::new();
+    std::fs::remove_file(setup.path("affordance/best.safetensors")).unwrap();
+    let out = setup.run(&["eval", "--task", "test"]);
+    assert_user_error(&out, &["best.safetensors", "graspmap train"]);
+    let out = setup.run(&["eval", "--task", "tests"]);
+    assert_user_error(&out, &["tests", "empty_bin"]);
+    let out = setup.run(&["eval", "--task", "empty_bin", "--seeds", "9-3"]);
+    assert_user_error(&out, &["9-3"]);
+    let corrupt = setup.path("corrupt.safetensors");
+    std::fs::write(&corrupt, b"not a checkpoint").unwrap();
+    let out = setup.run(&[
+        "eval",
+        "--task",
+        "test",
+        "--checkpoint",
+        corrupt.to_str().unwrap(),
+    ]);
+    assert_user_error(&out, &["corrupt.safetensors"]);
+
+    let checkpoint = Setup::new();
+    let small = setup.path("small.png");
+    image::RgbImage::new(64, 64).save(&small).unwrap();
+    let out = checkpoint.run(&["predict", "--image", small.to_str().unwrap()]);
+    assert_user_error(&out, &["small.png", "64×64", "128×128"]);
+    let grey = setup.path("grey.png");
+    image::GrayImage::new(128, 128).save(&grey).unwrap();
+    let out = checkpoint.run(&["predict", "--image", grey.to_str().unwrap()]);
+    assert_user_error(&out, &["grey.png", "RGB"]);
+    let text = setup.path("notes.png");
+    std::fs::write(&text, b"hello").unwrap();
+    let out = checkpoint.run(&["predict", "--image", text.to_str().unwrap()]);
+    assert_user_error(&out, &["notes.png"]);
+    let out = checkpoint.run(&["predict", "--image", "/nonexistent/photo.png"]);
+    assert_user_error(&out, &["/nonexistent/photo.png"]);
+}
+
+#[test]
+fn record_writes_the_episode_beside_the_camera_view() {
+    let setup = Setup::new();
+    let gif = setup.path("episode.gif");
+    let out = setup.oracle_empty_bin(1, &["--record", gif.to_str().unwrap()]);
+    assert_ok(&out);
+    let decoder = image::codecs::gif::GifDecoder::new(std::io::BufReader::new(
+        std::fs::File::open(&gif).unwrap(),
+    ))
+    .unwrap();
+    let frames = image::AnimationDecoder::into_frames(decoder)
+        .collect_frames()
+        .unwrap();
+    assert!(frames.len() > 10, "{} frames", frames.len());
+    // The oblique view (320 × 240) and the camera view scaled to 240 × 240.
+    assert_eq!(frames[0].buffer().dimensions(), (560, 240));
+    let out = setup.run(&[
+        "eval", "--task", "test", "--seeds", "1-2", "--record", "x.gif",
+    ]);
+    assert_user_error(&out, &["--record", "--seeds"]);
+}

@@ -1,0 +1,343 @@
+//! `graspmap label` end to end: the reference format, resuming after a kill, `--check`, file-driven and interactive clicks.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::Duration;
+
+use graspmap::data::labels::{LabelStore, Labels};
+
+const BIN: &str = env!("CARGO_BIN_EXE_graspmap");
+
+fn fixture() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/reference-labels")
+}
+
+/// A data dir with a split of two easy training objects, so runs take a second or two.
+struct Workspace {
+    dir: tempfile::TempDir,
+}
+
+impl Workspace {
+    fn new() -> Self {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("split.json"),
+            r#"{"train": ["YcbTennisBall", "YcbFoamBrick"], "test": []}"#,
+        )
+        .unwrap();
+        Self { dir }
+    }
+
+    fn data(&self) -> PathBuf {
+        self.dir.path().join("data")
+    }
+
+    fn labels(&self) -> PathBuf {
+        self.data().join("labels")
+    }
+
+    fn command(&self, args: &[&str]) -> Command {
+        let mut command = Command::new(BIN);
+        command
+            .arg("--data")
+            .arg(self.data())
+            .arg("--split")
+            .arg(self.dir.path().join("split.json"))
+            .arg("label")
+            .args(args)
+            .env_remove("GRASPMAP_LOG");
+        command
+    }
+
+    fn run(&self, args: &[&str]) -> Output {
+        self.command(args).output().unwrap()
+    }
+
+    /// Every file of the labels dir, by name, with its bytes.
+    fn snapshot(&self) -> Vec<(String, Vec<u8>)> {
+        let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(self.labels())
+            .unwrap()
+            .flatten()
+            .map(|e| {
+                (
+                    e.file_name().to_string_lossy().into_owned(),
+                    std::fs::read(e.path()).unwrap(),
+                )
+            })
+            .collect();
+        files.sort();
+        files
+    }
+}
+
+fn assert_ok(out: &Output) {
+    assert!(
+        out.status.success(),
+        "stdout: {}\nstderr: {}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn assert_user_error(out: &Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains(needle), "{needle:?} missing from {stderr}");
+}
+
+#[test]
+fn the_reference_fixture_loads_and_round_trips() {
+    let store = LabelStore::new(fixture());
+    let labels = store.load().unwrap();
+    assert_eq!(labels.len(), 4);
+    assert_eq!(labels.of("YcbHammer")[1].angle, 112.5);
+    assert_eq!(
+        (
+            labels.of("YcbTomatoSoupCan")[0].x,
+            labels.of("YcbTomatoSoupCan")[0].y
+        ),
+        (64, 58)
+    );
+    let known = ["YcbHammer".to_owned(), "YcbTomatoSoupCan".to_owned()];
+    assert_eq!(store.check(&known), Vec::<String>::new());
+    // Written back, it is byte for byte the reference tool's file (indent 4, float angles).
+    let original = std::fs::read_to_string(store.labels_path()).unwrap();
+    assert_eq!(labels.to_json().trim_end(), original.trim_end());
+    assert_eq!(
+        Labels::parse(&labels.to_json(), Path::new("x")).unwrap(),
+        labels
+    );
+}
+
+#[test]
+fn the_same_seed_gives_byte_identical_datasets_whatever_the_thread_count() {
+    let a = Workspace::new();
+    let b = Workspace::new();
+    assert_ok(&a.run(&["--per-object", "3", "--threads", "2"]));
+    assert_ok(&b.run(&["--per-object", "3", "--threads", "1"]));
+    let snapshot = a.snapshot();
+    assert_eq!(snapshot, b.snapshot());
+    let labels = LabelStore::new(a.labels()).load().unwrap();
+    assert_eq!(labels.of("YcbTennisBall").len(), 3);
+    assert_eq!(labels.of("YcbFoamBrick").len(), 3);
+    // Another seed, other scenes.
+    let c = Workspace::new();
+    assert_ok(&c.run(&["--per-object", "3", "--seed", "7"]));
+    assert_ne!(snapshot, c.snapshot());
+}
+
+#[test]
+fn a_run_killed_at_any_point_resumes_to_the_same_dataset() {
+    let reference = Workspace::new();
+    assert_ok(&reference.run(&["--per-object", "4"]));
+    let expected = reference.snapshot();
+    for delay_ms in [60, 250, 500, 900] {
+        let ws = Workspace::new();
+        let mut child = ws
+            .command(&["--per-object", "4"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .unwrap();
+        std::thread::sleep(Duration::from_millis(delay_ms));
+        let _ = child.kill();
+        let _ = child.wait();
+        // Whatever was written is a valid dataset.
+        if ws.labels().join("labels.json").exists() {
+            let known = ["YcbTennisBall".to_owned(), "YcbFoamBrick".to_owned()];
+            let problems = LabelStore::new(ws.labels()).check(&known);
+            let real: Vec<_> = problems
+                .iter()
+                .filter(|p| !p.contains("extra image"))
+                .collect();
+            assert!(
+                real.is_empty(),
+                "after a kill at {delay_ms} ms: {problems:?}"
+            );
+        }
+        assert_ok(&ws.run(&["--per-object", "4"]));
+        assert_eq!(ws.snapshot(), expected, "killed at {delay_ms} ms");
+    }
+}
+
+#[test]
+fn resuming_asks_for_the_same_settings() {
+    let ws = Workspace::new();
+    assert_ok(&ws.run(&["--per-object", "1"]));
+    assert_user_error(&ws.run(&["--per-object", "2", "--seed", "3"]), "--seed 0");
+    // --force starts over with the new settings.
+    assert_ok(&ws.run(&["--per-object", "1", "--seed", "3", "--force"]));
+}
+
+#[test]
+fn check_reports_each_kind_of_corruption() {
+    let ws = Workspace::new();
+    let labels = ws.labels();
+    std::fs::create_dir_all(&labels).unwrap();
+    for entry in std::fs::read_dir(fixture()).unwrap().flatten() {
+        std::fs::copy(entry.path(), labels.join(entry.file_name())).unwrap();
+    }
+    assert_ok(&ws.run(&["--check"]));
+
+    std::fs::remove_file(labels.join("YcbHammer_2_rgb.png")).unwrap();
+    image::RgbImage::new(128, 128)
+        .save(labels.join("YcbHammer_7_rgb.png"))
+        .unwrap();
+    image::RgbImage::new(64, 64)
+        .save(labels.join("YcbTomatoSoupCan_1_rgb.png"))
+        .unwrap();
+    let text = std::fs::read_to_string(labels.join("labels.json"))
+        .unwrap()
+        .replacen("75,", "200,", 1)
+        .replace("YcbTomatoSoupCan", "YcbUnicorn");
+    std::fs::write(labels.join("labels.json"), text).unwrap();
+    // The renamed object's images are now extra files, and its own images are missing.
+    let out = ws.run(&["--check"]);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(2));
+    for needle in [
+        "YcbHammer_2_rgb.png: missing image",
+        "YcbHammer_7_rgb.png: extra image",
+        "x = 200",
+        "unknown object 'YcbUnicorn'",
+        "YcbTomatoSoupCan_1_rgb.png: extra image",
+    ] {
+        assert!(
+            stdout.contains(needle),
+            "{needle:?} not reported:\n{stdout}"
+        );
+    }
+
+    // A wrong image size is reported for a listed image.
+    let ws = Workspace::new();
+    let labels = ws.labels();
+    std::fs::create_dir_all(&labels).unwrap();
+    for entry in std::fs::read_dir(fixture()).unwrap().flatten() {
+        std::fs::copy(entry.path(), labels.join(entry.file_name())).unwrap();
+    }
+    image::RgbImage::new(64, 64)
+        .save(labels.join("YcbTomatoSoupCan_2_rgb.png"))
+        .unwrap();
+    let out = ws.run(&["--check"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("image is 64×64, expected 128×128"));
+}
+
+#[test]
+fn file_driven_clicks_reproduce_the_labels_they_describe() {
+    let scripted = Workspace::new();
+    assert_ok(&scripted.run(&["--per-object", "2", "--json", "-"]));
+    let labels = LabelStore::new(scripted.labels()).load().unwrap();
+    let report: serde_json::Value =
+        serde_json::from_slice(&scripted.run(&["--per-object", "2", "--json", "-"]).stdout)
+            .unwrap();
+    for object in report["results"]["objects"].as_array().unwrap() {
+        assert_eq!(
+            object["rounds"], 2,
+            "this test needs every scripted round to succeed"
+        );
+    }
+    let clicks: Vec<serde_json::Value> = labels
+        .iter()
+        .flat_map(|(object, list)| {
+            list.iter()
+                .map(move |l| serde_json::json!({"object": object, "x": l.x, "y": l.y, "angle": l.angle}))
+        })
+        .collect();
+    let replay = Workspace::new();
+    let clicks_path = replay.dir.path().join("clicks.json");
+    std::fs::write(&clicks_path, serde_json::to_string(&clicks).unwrap()).unwrap();
+    let out = replay.run(&[
+        "--per-object",
+        "2",
+        "--clicks",
+        clicks_path.to_str().unwrap(),
+    ]);
+    assert_ok(&out);
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("YcbFoamBrick round 1 click"),
+        "each click is reported: {stdout}"
+    );
+    let files = |ws: &Workspace| {
+        ws.snapshot()
+            .into_iter()
+            .filter(|(name, _)| name != "progress.json")
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(files(&replay), files(&scripted));
+}
+
+#[test]
+fn bad_clicks_files_fail_before_any_simulation() {
+    let ws = Workspace::new();
+    let path = ws.dir.path().join("clicks.json");
+    let good = r#"{"object": "YcbTennisBall", "x": 64, "y": 64, "angle": 0}"#;
+    for (text, needle) in [
+        (
+            r#"[{"object": "YcbUnicorn", "x": 1, "y": 2, "angle": 0}]"#.to_owned(),
+            "unknown object 'YcbUnicorn'",
+        ),
+        (
+            r#"[{"object": "YcbTennisBall", "x": 128, "y": 2, "angle": 0}]"#.to_owned(),
+            "\"x\" = 128",
+        ),
+        (
+            r#"[{"object": "YcbTennisBall", "x": 1, "y": "top", "angle": 0}]"#.to_owned(),
+            "\"y\" = \"top\"",
+        ),
+        (format!("[{good}]"), "clicks for YcbTennisBall"),
+        ("{not json".to_owned(), "not valid JSON"),
+    ] {
+        std::fs::write(&path, text).unwrap();
+        let out = ws.run(&["--per-object", "2", "--clicks", path.to_str().unwrap()]);
+        assert_user_error(&out, needle);
+        assert!(!ws.labels().join("labels.json").exists());
+    }
+}
+
+#[test]
+fn interactive_clicks_come_from_stdin() {
+    let ws = Workspace::new();
+    // Learn a click that works for round 0 of the first object from a scripted run.
+    let scripted = Workspace::new();
+    assert_ok(&scripted.run(&["--per-object", "1"]));
+    let label = LabelStore::new(scripted.labels())
+        .load()
+        .unwrap()
+        .of("YcbTennisBall")[0];
+    let preview = ws.dir.path().join("preview.png");
+    let turns = (label.angle / 22.5).round() as usize;
+    let mut script = format!("{} {}\n", label.x, label.y);
+    script.push_str(&"d\n".repeat(turns));
+    script.push_str("q\n");
+    let mut child = ws
+        .command(&[
+            "--per-object",
+            "1",
+            "--interactive",
+            "--preview",
+            preview.to_str().unwrap(),
+        ])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(script.as_bytes())
+        .unwrap();
+    let out = child.wait_with_output().unwrap();
+    // The foam brick never gets its click: stdin ends, and the run stops with what it has.
+    assert_user_error(&out, "stdin closed");
+    let got = LabelStore::new(ws.labels()).load().unwrap();
+    assert_eq!(got.of("YcbTennisBall"), &[label]);
+    let preview_image = image::open(&preview).unwrap();
+    assert_eq!((preview_image.width(), preview_image.height()), (512, 512));
+}

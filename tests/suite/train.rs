@@ -1,0 +1,257 @@
+//! `graspmap train` end to end on the small reference fixture: loss goes down, checkpoints round-trip, resume is exact, bad inputs are clear errors.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use graspmap::model::train::{
+    read_checkpoint, save_checkpoint, CheckpointMeta, Plateau, TrainConfig,
+};
+use graspmap::model::unet::MiniUNet;
+use tch::nn;
+
+const BIN: &str = env!("CARGO_BIN_EXE_graspmap");
+
+/// A data dir holding a copy of the reference fixture's four labels.
+fn data_dir() -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    let labels = dir.path().join("labels");
+    std::fs::create_dir_all(&labels).unwrap();
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/reference-labels");
+    for entry in std::fs::read_dir(fixture).unwrap().flatten() {
+        std::fs::copy(entry.path(), labels.join(entry.file_name())).unwrap();
+    }
+    dir
+}
+
+fn train(data: &Path, args: &[&str]) -> Output {
+    train_in(data, "fp32", args)
+}
+
+fn train_in(data: &Path, precision: &str, args: &[&str]) -> Output {
+    Command::new(BIN)
+        .arg("--data")
+        .arg(data)
+        .args(["--threads", "2", "train", "--batch-size", "2"])
+        .args(["--precision", precision])
+        .args(args)
+        .env_remove("GRASPMAP_LOG")
+        .output()
+        .unwrap()
+}
+
+fn assert_ok(out: &Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+fn assert_user_error(out: &Output, needle: &str) {
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
+    assert!(stderr.contains(needle), "{needle:?} missing from {stderr}");
+}
+
+fn history(data: &Path, name: &str) -> CheckpointMeta {
+    read_checkpoint(&data.join("affordance"), name).unwrap().1
+}
+
+#[test]
+fn three_epochs_lower_the_loss_and_write_every_artefact() {
+    let data = data_dir();
+    assert_ok(&train(data.path(), &["--epochs", "3"]));
+    let meta = history(data.path(), "last");
+    assert_eq!(meta.epoch, 3);
+    let losses: Vec<f64> = meta.history.iter().map(|r| r.train_loss).collect();
+    assert!(
+        losses[2] < losses[0],
+        "training loss did not go down: {losses:?}"
+    );
+    let out: PathBuf = data.path().join("affordance");
+    for file in [
+        "best.safetensors",
+        "best.json",
+        "last.safetensors",
+        "last.json",
+        "losses.csv",
+    ] {
+        assert!(out.join(file).is_file(), "{file} missing");
+    }
+    for epoch in 1..=3 {
+        let vis = image::open(out.join(format!("training_vis/{epoch:03}.png"))).unwrap();
+        assert_eq!((vis.width(), vis.height()), (384, 128));
+    }
+    let curve = image::open(out.join("losses.png")).unwrap();
+    assert_eq!((curve.width(), curve.height()), (800, 500));
+    let csv = std::fs::read_to_string(out.join("losses.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 4, "{csv}");
+    let best = history(data.path(), "best");
+    let lowest = meta
+        .history
+        .iter()
+        .map(|r| r.val_loss)
+        .fold(f64::INFINITY, f64::min);
+    assert_eq!(best.best_val_loss, lowest);
+}
+
+#[test]
+fn resume_continues_exactly_like_an_uninterrupted_run() {
+    let straight = data_dir();
+    assert_ok(&train(straight.path(), &["--epochs", "4"]));
+    let resumed = data_dir();
+    assert_ok(&train(resumed.path(), &["--epochs", "2"]));
+    assert_ok(&train(resumed.path(), &["--epochs", "4", "--resume"]));
+    let a = history(straight.path(), "last").history;
+    let b = history(resumed.path(), "last").history;
+    assert_eq!(a.len(), 4);
+    assert_eq!(b.len(), 4);
+    for (x, y) in a.iter().zip(&b) {
+        for (p, q) in [
+            (x.train_loss, y.train_loss),
+            (x.val_loss, y.val_loss),
+            (x.lr, y.lr),
+        ] {
+            assert!(((p - q) / p).abs() <= 1e-5, "epoch {}: {p} vs {q}", x.epoch);
+        }
+    }
+}
+
+#[test]
+fn bf16_training_also_resumes_exactly() {
+    let straight = data_dir();
+    let bf16 = |data: &Path, args: &[&str]| train_in(data, "bf16", args);
+    assert_ok(&bf16(straight.path(), &["--epochs", "3"]));
+    let resumed = data_dir();
+    assert_ok(&bf16(resumed.path(), &["--epochs", "2"]));
+    assert_ok(&bf16(resumed.path(), &["--epochs", "3", "--resume"]));
+    let a = history(straight.path(), "last");
+    let b = history(resumed.path(), "last");
+    assert_eq!(serde_json::to_value(a.config.precision).unwrap(), "bf16");
+    for (x, y) in a.history.iter().zip(&b.history) {
+        let rel = ((x.val_loss - y.val_loss) / x.val_loss).abs();
+        assert!(
+            rel <= 1e-5,
+            "epoch {}: {} vs {}",
+            x.epoch,
+            x.val_loss,
+            y.val_loss
+        );
+    }
+    // Resuming in another precision is refused.
+    let out = Command::new(BIN)
+        .arg("--data")
+        .arg(resumed.path())
+        .args([
+            "train",
+            "--batch-size",
+            "2",
+            "--precision",
+            "fp32",
+            "--epochs",
+            "4",
+            "--resume",
+        ])
+        .output()
+        .unwrap();
+    assert_user_error(&out, "--precision bf16");
+}
+
+#[test]
+fn a_checkpoint_round_trips_bit_exactly() {
+    tch::manual_seed(3);
+    let dir = tempfile::tempdir().unwrap();
+    let vs = nn::VarStore::new(tch::Device::Cpu);
+    let _net = MiniUNet::new(&vs.root());
+    let meta = CheckpointMeta {
+        schema: CheckpointMeta::SCHEMA.to_owned(),
+        config: TrainConfig::default(),
+        epoch: 7,
+        history: Vec::new(),
+        best_val_loss: 0.5,
+        best_epoch: 7,
+        lr: 1e-4,
+        plateau: Plateau::default(),
+        adam_steps: 70,
+        train_indices: vec![0, 2],
+        val_indices: vec![1],
+    };
+    save_checkpoint(&vs, &[], &meta, dir.path(), "best").unwrap();
+    let (tensors, back) = read_checkpoint(dir.path(), "best").unwrap();
+    assert_eq!(back, meta);
+    let mut restored = nn::VarStore::new(tch::Device::Cpu);
+    let _other = MiniUNet::new(&restored.root());
+    graspmap::model::train::load_weights(&mut restored, &tensors, dir.path()).unwrap();
+    let original = vs.variables();
+    for (name, tensor) in restored.variables() {
+        assert!(tensor.equal(&original[&name]), "{name} changed");
+    }
+}
+
+#[test]
+fn missing_or_bad_inputs_are_clear_errors() {
+    let empty = tempfile::tempdir().unwrap();
+    assert_user_error(&train(empty.path(), &["--epochs", "1"]), "labels.json");
+
+    let data = data_dir();
+    assert_user_error(
+        &train(data.path(), &["--epochs", "1", "--resume"]),
+        "last.json",
+    );
+
+    assert_ok(&train(data.path(), &["--epochs", "1"]));
+    let last = data.path().join("affordance/last.safetensors");
+    std::fs::write(&last, b"not a tensor file").unwrap();
+    assert_user_error(
+        &train(data.path(), &["--epochs", "2", "--resume"]),
+        "last.safetensors",
+    );
+    std::fs::write(data.path().join("affordance/last.json"), b"{ half").unwrap();
+    assert_user_error(
+        &train(data.path(), &["--epochs", "2", "--resume"]),
+        "last.json",
+    );
+
+    let image = data.path().join("labels/YcbHammer_1_rgb.png");
+    image::RgbImage::new(64, 64).save(&image).unwrap();
+    assert_user_error(
+        &train(data.path(), &["--epochs", "1"]),
+        "YcbHammer_1_rgb.png",
+    );
+
+    assert_user_error(&train(data.path(), &["--epochs", "0"]), "0");
+    let out = Command::new(BIN)
+        .args(["train", "--precision", "fp16"])
+        .output()
+        .unwrap();
+    assert_user_error(&out, "fp16");
+    assert_user_error(&train(data.path(), &["--lr", "-1"]), "-1");
+}
+
+#[test]
+fn bench_reports_rust_timings_without_the_peer() {
+    let out = Command::new(BIN)
+        .args([
+            "--json",
+            "-",
+            "bench",
+            "train",
+            "--no-peer",
+            "--steps",
+            "2",
+            "--rounds",
+            "1",
+        ])
+        .output()
+        .unwrap();
+    assert_ok(&out);
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(report["schema"], "graspmap.bench/1");
+    let rust = &report["results"]["rust"];
+    assert!(rust["train_step_ms"].as_f64().unwrap() > 0.0);
+    assert!(rust["infer_8_rotations_ms"].as_f64().unwrap() > 0.0);
+    assert_eq!(rust["steps"], 2);
+    assert!(report["results"]["python"].is_null());
+}
