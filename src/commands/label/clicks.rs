@@ -14,7 +14,7 @@ use super::LabelConfig;
 use crate::data::atomic::save_image_atomic;
 use crate::data::labels::{Label, Labels, Progress};
 use crate::grasp::draw::draw_grasp;
-use crate::grasp::{normalize_angle, PixelGrasp, BIN_DEG, IMAGE_SIZE};
+use crate::grasp::{normalize_angle, PixelError, PixelGrasp, BIN_DEG, IMAGE_SIZE};
 use crate::policy::oracle::{self, OracleConfig};
 use crate::vision::camera::Camera;
 use crate::vision::render::Frame;
@@ -153,8 +153,13 @@ pub(super) fn read_clicks(
                     )
                 })
         };
-        let grasp = PixelGrasp::checked(number("x")?, number("y")?, number("angle")?)
-            .with_context(|| format!("{}: not a grasp in the image", at()))?;
+        let grasp = match PixelGrasp::checked(number("x")?, number("y")?, number("angle")?) {
+            Ok(grasp) => grasp,
+            Err(PixelError::OutOfImage { axis, value, max }) => {
+                bail!("{}: \"{axis}\" = {value} must be an integer in 0..={max}", at())
+            }
+            Err(other) => bail!("{}: {other}", at()),
+        };
         let label = Label::from(grasp);
         clicks.entry(object.to_owned()).or_default().push(label);
     }
