@@ -2,17 +2,17 @@
 
 /// A success rate with its 95 % Wilson score interval.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Rate {
+pub(crate) struct Rate {
     /// Successes.
-    pub successes: usize,
+    pub(crate) successes: usize,
     /// Trials.
-    pub trials: usize,
+    pub(crate) trials: usize,
     /// successes / trials (0 when there were none).
-    pub rate: f64,
+    pub(crate) rate: f64,
     /// Lower end of the 95 % Wilson interval.
-    pub wilson_low: f64,
+    pub(crate) wilson_low: f64,
     /// Upper end of the 95 % Wilson interval.
-    pub wilson_high: f64,
+    pub(crate) wilson_high: f64,
 }
 
 /// z for a two-sided 95 % interval.
@@ -21,7 +21,7 @@ const Z95: f64 = 1.959_963_984_540_054;
 impl Rate {
     /// The rate and its interval. Wilson's interval stays inside [0, 1] and is sensible at 0 and
     /// at all successes, unlike the normal approximation, which matters at 15–90 trials.
-    pub fn new(successes: usize, trials: usize) -> Self {
+    pub(crate) fn new(successes: usize, trials: usize) -> Self {
         assert!(
             successes <= trials,
             "{successes} successes in {trials} trials"
@@ -51,7 +51,7 @@ impl Rate {
     }
 
     /// "25/30 = 83.3 % (95 % CI 66.4–92.7 %)".
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         format!(
             "{}/{} = {:.1} % (95 % CI {:.1}–{:.1} %)",
             self.successes,
@@ -65,22 +65,22 @@ impl Rate {
 
 /// Mean and sample standard deviation (n − 1; 0 for fewer than two values).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Spread {
+pub(crate) struct Spread {
     /// Mean.
-    pub mean: f64,
+    pub(crate) mean: f64,
     /// Sample standard deviation.
-    pub std: f64,
+    pub(crate) std: f64,
     /// Smallest value.
-    pub min: f64,
+    pub(crate) min: f64,
     /// Largest value.
-    pub max: f64,
+    pub(crate) max: f64,
     /// Number of values.
-    pub count: usize,
+    pub(crate) count: usize,
 }
 
 impl Spread {
     /// The spread of `values` (all zeros when empty).
-    pub fn of(values: &[f64]) -> Self {
+    pub(crate) fn of(values: &[f64]) -> Self {
         let count = values.len();
         if count == 0 {
             return Self {
@@ -108,7 +108,7 @@ impl Spread {
 }
 
 /// The median (mean of the middle two for even counts; 0 when empty).
-pub fn median(values: &[f64]) -> f64 {
+pub(crate) fn median(values: &[f64]) -> f64 {
     if values.is_empty() {
         return 0.0;
     }
@@ -125,16 +125,16 @@ pub fn median(values: &[f64]) -> f64 {
 /// How often each failure reason occurred: the one tally behind every report's failure column.
 #[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
 #[serde(transparent)]
-pub struct FailureTally(std::collections::BTreeMap<String, usize>);
+pub(crate) struct FailureTally(std::collections::BTreeMap<String, usize>);
 
 impl FailureTally {
     /// Counts one failure.
-    pub fn add(&mut self, reason: &str) {
+    pub(crate) fn add(&mut self, reason: &str) {
         *self.0.entry(reason.to_owned()).or_default() += 1;
     }
 
     /// The tally of the given reasons.
-    pub fn of<'a>(reasons: impl IntoIterator<Item = &'a str>) -> Self {
+    pub(crate) fn of<'a>(reasons: impl IntoIterator<Item = &'a str>) -> Self {
         let mut tally = Self::default();
         for reason in reasons {
             tally.add(reason);
@@ -143,7 +143,7 @@ impl FailureTally {
     }
 
     /// "collision 2, slipped 1", or "-" when nothing failed.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         if self.0.is_empty() {
             return "-".to_owned();
         }

@@ -1,10 +1,10 @@
 //! Options with a stable name: how the enums of configs are spelled on the command line, in
 //! JSON reports and in printed tables, from one list per enum.
 //!
-//! The CLI builds its value parsers from these lists, so the layers below it never see clap.
+//! The CLI builds its value parsers from these lists, so the layers below it never see the argument parser.
 
 /// An enum whose variants users name.
-pub trait Named: Copy + Eq + Send + Sync + 'static {
+pub(crate) trait Named: Copy + Eq + Send + Sync + 'static {
     /// Every variant, in the order `--help` lists them.
     const ALL: &'static [Self];
 
@@ -14,3 +14,50 @@ pub trait Named: Copy + Eq + Send + Sync + 'static {
     /// One line on what the variant does, for `--help`.
     fn help(self) -> &'static str;
 }
+
+/// Declares a [`Named`] enum: each variant with its doc comment, its name and its `--help`
+/// line, in one row. It derives the usual traits, serialises as the name and displays as it.
+macro_rules! named_enum {
+    (
+        $(#[$meta:meta])*
+        $vis:vis enum $enum:ident {
+            $(
+                $(#[$variant_meta:meta])*
+                $variant:ident = $name:literal, $help:literal,
+            )+
+        }
+    ) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+        $vis enum $enum {
+            $(
+                $(#[$variant_meta])*
+                #[serde(rename = $name)]
+                $variant,
+            )+
+        }
+
+        impl $crate::named::Named for $enum {
+            const ALL: &'static [Self] = &[$(Self::$variant),+];
+
+            fn name(self) -> &'static str {
+                match self {
+                    $(Self::$variant => $name,)+
+                }
+            }
+
+            fn help(self) -> &'static str {
+                match self {
+                    $(Self::$variant => $help,)+
+                }
+            }
+        }
+
+        impl std::fmt::Display for $enum {
+            fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+                f.write_str($crate::named::Named::name(*self))
+            }
+        }
+    };
+}
+pub(crate) use named_enum;

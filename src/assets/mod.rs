@@ -15,7 +15,7 @@ use include_dir::{include_dir, Dir};
 static BUNDLED: Dir<'static> = include_dir!("$CARGO_MANIFEST_DIR/assets");
 
 /// How bundled files are named in messages and reports: they have no path on disk.
-pub const BUNDLED_PREFIX: &str = "bundled:";
+pub(crate) const BUNDLED_PREFIX: &str = "bundled:";
 
 /// A bundled text file by its path under assets/, e.g. `ur5/ur5.urdf`.
 pub(crate) fn bundled_text(path: &str) -> Option<&'static str> {
@@ -36,7 +36,7 @@ pub(crate) fn bundled_folders(path: &str) -> Vec<String> {
 }
 
 /// The UR5's URDF (compiled in; it names no mesh files).
-pub const UR5_URDF: &str = include_str!("../../assets/ur5/ur5.urdf");
+pub(crate) const UR5_URDF: &str = include_str!("../../assets/ur5/ur5.urdf");
 
 #[cfg(test)]
 mod tests {

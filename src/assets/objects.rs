@@ -13,7 +13,7 @@ pub const DEFAULT_FRICTION: f32 = 0.5;
 #[derive(Debug, Clone)]
 pub struct ObjectModel {
     /// Name (the directory name, e.g. `YcbMustardBottle`).
-    pub name: String,
+    pub(crate) name: String,
     /// Mass in kg.
     pub mass: f32,
     /// Lateral friction coefficient μ (combined with the pads' 1.0 by multiplication).
@@ -70,14 +70,14 @@ impl ObjectLibrary {
 
     /// Where the models come from, for messages and reports: the directory, or
     /// `bundled:objects`.
-    pub fn location(&self) -> PathBuf {
+    pub(crate) fn location(&self) -> PathBuf {
         self.dir
             .clone()
             .unwrap_or_else(|| PathBuf::from(format!("{}{BUNDLED_OBJECTS}", super::BUNDLED_PREFIX)))
     }
 
     /// The split that comes with the library: `split.json` at its root.
-    pub fn default_split(&self) -> SplitFile {
+    pub(crate) fn default_split(&self) -> SplitFile {
         match &self.dir {
             Some(dir) => SplitFile::Path(dir.join("split.json")),
             None => SplitFile::Bundled,
@@ -85,7 +85,7 @@ impl ObjectLibrary {
     }
 
     /// Names of all objects with a model.urdf, sorted.
-    pub fn names(&self) -> Vec<String> {
+    pub(crate) fn names(&self) -> Vec<String> {
         let Some(dir) = &self.dir else {
             return super::bundled_folders(BUNDLED_OBJECTS);
         };
@@ -130,7 +130,7 @@ impl ObjectLibrary {
 }
 
 /// Builds an object from a parsed URDF: every link's geometry is merged into one rigid body.
-pub fn object_from_urdf(name: &str, file: &UrdfFile) -> Result<ObjectModel, ObjectError> {
+pub(crate) fn object_from_urdf(name: &str, file: &UrdfFile) -> Result<ObjectModel, ObjectError> {
     let invalid = |message: &str| ObjectError::Invalid {
         path: file.path.clone(),
         message: message.to_owned(),
@@ -170,9 +170,9 @@ pub fn object_from_urdf(name: &str, file: &UrdfFile) -> Result<ObjectModel, Obje
 #[serde(deny_unknown_fields)]
 pub struct Split {
     /// Objects seen in labelling and training.
-    pub train: Vec<String>,
+    pub(crate) train: Vec<String>,
     /// Held-out objects.
-    pub test: Vec<String>,
+    pub(crate) test: Vec<String>,
 }
 
 /// Where the split comes from.
@@ -186,7 +186,7 @@ pub enum SplitFile {
 
 impl SplitFile {
     /// The file's path, or `bundled:objects/split.json`, for messages and reports.
-    pub fn location(&self) -> PathBuf {
+    pub(crate) fn location(&self) -> PathBuf {
         match self {
             SplitFile::Path(path) => path.clone(),
             SplitFile::Bundled => PathBuf::from(format!(
@@ -215,7 +215,7 @@ impl SplitFile {
 
 impl Split {
     /// Reads a split JSON file.
-    pub fn read(path: &Path) -> Result<Self, ObjectError> {
+    pub(crate) fn read(path: &Path) -> Result<Self, ObjectError> {
         let text = std::fs::read_to_string(path).map_err(|e| ObjectError::Split {
             path: path.to_owned(),
             message: e.to_string(),
@@ -224,7 +224,7 @@ impl Split {
     }
 
     /// Parses split JSON; `path` names it in errors.
-    pub fn parse(text: &str, path: &Path) -> Result<Self, ObjectError> {
+    pub(crate) fn parse(text: &str, path: &Path) -> Result<Self, ObjectError> {
         let err = |message: String| ObjectError::Split {
             path: path.to_owned(),
             message,

@@ -20,7 +20,7 @@ pub struct Visual {
     /// Geometry in the renderer's conventions.
     pub shape: Shape,
     /// Pose of the shape in the link frame.
-    pub pose: Pose,
+    pub(crate) pose: Pose,
     /// Albedo in [0, 1].
     pub color: [f32; 3],
 }
@@ -52,16 +52,14 @@ pub struct Collision {
 /// Everything the crate uses from one URDF link.
 #[derive(Debug, Clone)]
 pub struct LinkGeometry {
-    /// Link name.
-    pub name: String,
     /// Drawable pieces.
-    pub visuals: Vec<Visual>,
+    pub(crate) visuals: Vec<Visual>,
     /// Collision pieces.
     pub collisions: Vec<Collision>,
     /// `<inertial><mass>`, if present and positive.
-    pub mass: Option<f32>,
+    pub(crate) mass: Option<f32>,
     /// Bullet's `<contact><lateral_friction value=…>`, if present.
-    pub lateral_friction: Option<f32>,
+    pub(crate) lateral_friction: Option<f32>,
 }
 
 /// Failures reading a URDF or the meshes it references.
@@ -103,9 +101,9 @@ pub enum UrdfError {
 #[derive(Debug, Clone)]
 pub struct UrdfFile {
     /// Path it was read from.
-    pub path: PathBuf,
+    pub(crate) path: PathBuf,
     /// The urdf-rs model.
-    pub robot: urdf_rs::Robot,
+    pub(crate) robot: urdf_rs::Robot,
     /// Per link name, Bullet's lateral friction tag.
     frictions: Vec<(String, f32)>,
 }
@@ -121,7 +119,7 @@ impl UrdfFile {
     }
 
     /// Parses URDF text; `path` is used for messages and to resolve relative mesh paths.
-    pub fn parse(text: &str, path: &Path) -> Result<Self, UrdfError> {
+    pub(crate) fn parse(text: &str, path: &Path) -> Result<Self, UrdfError> {
         let parse_error = |message: String| UrdfError::Parse {
             path: path.to_owned(),
             message,
@@ -137,11 +135,6 @@ impl UrdfFile {
 
     fn base_dir(&self) -> &Path {
         self.path.parent().unwrap_or_else(|| Path::new("."))
-    }
-
-    /// Index of the link with this name.
-    pub fn link_index(&self, name: &str) -> Option<usize> {
-        self.robot.links.iter().position(|l| l.name == name)
     }
 
     /// Converts one link's visuals, collisions, mass and friction, loading any meshes.
@@ -216,7 +209,6 @@ impl UrdfFile {
         }
         let mass = link.inertial.mass.value as f32;
         Ok(LinkGeometry {
-            name: link.name.clone(),
             visuals,
             collisions,
             mass: (mass > 0.0).then_some(mass),
@@ -430,7 +422,7 @@ fn urdf_pose(origin: &urdf_rs::Pose) -> Pose {
 }
 
 /// URDF's fixed-axis roll-pitch-yaw: R = Rz(yaw)·Ry(pitch)·Rx(roll).
-pub fn rpy_rotation(roll: f64, pitch: f64, yaw: f64) -> Rotation {
+pub(crate) fn rpy_rotation(roll: f64, pitch: f64, yaw: f64) -> Rotation {
     (Rotation::from_rotation_z(yaw as f32)
         * Rotation::from_rotation_y(pitch as f32)
         * Rotation::from_rotation_x(roll as f32))
@@ -439,7 +431,7 @@ pub fn rpy_rotation(roll: f64, pitch: f64, yaw: f64) -> Rotation {
 
 impl CollisionShape {
     /// The same geometry for the renderer (convex hulls are not drawable and become boxes of their bounds).
-    pub fn to_render_shape(&self) -> Shape {
+    pub(crate) fn to_render_shape(&self) -> Shape {
         match self {
             CollisionShape::Cuboid { half_extents } => Shape::Cuboid {
                 half_extents: *half_extents,

@@ -20,39 +20,39 @@ use crate::policy::collision::CollisionCheck;
 /// Teach a simulated UR5 to pick up objects it has never seen, from a few dozen labelled grasps.
 #[derive(Debug, Parser)]
 #[command(name = "graspmap", version, about)]
-pub struct Cli {
+pub(crate) struct Cli {
     #[command(flatten)]
-    pub global: GlobalArgs,
+    pub(crate) global: GlobalArgs,
     #[command(subcommand)]
-    pub command: Command,
+    pub(crate) command: Command,
 }
 
 /// Flags every command takes.
 #[derive(Debug, Args, Clone)]
-pub struct GlobalArgs {
+pub(crate) struct GlobalArgs {
     /// Data directory: labels in DIR/labels, model and evaluations in DIR/affordance.
     #[arg(long, global = true, default_value = "data", value_name = "DIR")]
-    pub data: PathBuf,
+    pub(crate) data: PathBuf,
     /// Directory of object models, each <Name>/model.urdf [default: the 15 bundled models].
     #[arg(long = "objects-dir", global = true, value_name = "DIR")]
-    pub objects_dir: Option<PathBuf>,
+    pub(crate) objects_dir: Option<PathBuf>,
     /// Train/test split JSON {"train": [..], "test": [..]} [default: <objects-dir>/split.json].
     #[arg(long, global = true, value_name = "FILE")]
-    pub split: Option<PathBuf>,
+    pub(crate) split: Option<PathBuf>,
     /// Worker threads for CPU-heavy work [default: all cores].
     #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
-    pub threads: Option<u16>,
+    pub(crate) threads: Option<u16>,
     /// Also write the results as JSON to PATH ('-' = stdout).
     #[arg(long, global = true, value_name = "PATH")]
-    pub json: Option<PathBuf>,
+    pub(crate) json: Option<PathBuf>,
     /// Print only results and errors, no progress.
     #[arg(long, short, global = true)]
-    pub quiet: bool,
+    pub(crate) quiet: bool,
 }
 
 /// The subcommands.
 #[derive(Debug, Subcommand)]
-pub enum Command {
+pub(crate) enum Command {
     /// Drop objects into bin 1 and save the top-down camera image.
     Scene(SceneArgs),
     /// Drop one object and run one simulated pick attempt.
@@ -72,58 +72,58 @@ pub enum Command {
 
 /// What `graspmap bench` measures.
 #[derive(Debug, Subcommand)]
-pub enum BenchCommand {
+pub(crate) enum BenchCommand {
     /// Training-step throughput and 8-rotation inference latency, Rust and Python alternating.
     Train(BenchTrainArgs),
 }
 
 /// `graspmap bench train`.
 #[derive(Debug, Args)]
-pub struct BenchTrainArgs {
+pub(crate) struct BenchTrainArgs {
     /// Timed steps per block and side (after 3 warm-up steps).
     #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..))]
-    pub steps: u32,
+    pub(crate) steps: u32,
     /// Blocks per side, alternating Rust and Python.
     #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..))]
-    pub rounds: u32,
+    pub(crate) rounds: u32,
     /// Precision of both sides.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
-    pub precision: PrecisionChoice,
+    pub(crate) precision: PrecisionChoice,
     /// Time only the Rust side (no Python environment needed).
     #[arg(long, conflicts_with = "python")]
-    pub no_peer: bool,
+    pub(crate) no_peer: bool,
     /// The peer's Python, with torch 2.13 [default: ./.venv-bench/bin/python, installed by
     /// scripts/setup-bench-peer.sh when run from a checkout].
     #[arg(long, value_name = "PATH")]
-    pub python: Option<PathBuf>,
+    pub(crate) python: Option<PathBuf>,
 }
 
 /// `graspmap train`.
 #[derive(Debug, Args)]
-pub struct TrainArgs {
+pub(crate) struct TrainArgs {
     /// Epochs to train (30 is usually enough).
     #[arg(long, default_value_t = 101, value_parser = clap::value_parser!(u32).range(1..))]
-    pub epochs: u32,
+    pub(crate) epochs: u32,
     /// Images per optimiser step.
     #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..))]
-    pub batch_size: u32,
+    pub(crate) batch_size: u32,
     /// Initial Adam learning rate.
     #[arg(long, default_value_t = 1e-3, value_parser = positive::<f64>)]
-    pub lr: f64,
+    pub(crate) lr: f64,
     /// Seed of the 90/10 split, initial weights, data order and augmentation.
     #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// Continue from DATA/affordance/last.* exactly where it stopped.
     #[arg(long)]
-    pub resume: bool,
+    pub(crate) resume: bool,
     /// Arithmetic of training.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
-    pub precision: PrecisionChoice,
+    pub(crate) precision: PrecisionChoice,
 }
 
 /// `--precision` values.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum PrecisionChoice {
+pub(crate) enum PrecisionChoice {
     /// bf16 where the CPU has native bf16 instructions, else fp32.
     Auto,
     /// float32 throughout.
@@ -134,7 +134,7 @@ pub enum PrecisionChoice {
 
 impl PrecisionChoice {
     /// The precision to use on this machine.
-    pub fn resolve(self) -> Precision {
+    pub(crate) fn resolve(self) -> Precision {
         match self {
             PrecisionChoice::Auto => Precision::fastest_supported(),
             PrecisionChoice::Fp32 => Precision::Fp32,
@@ -161,23 +161,23 @@ fn named<T: Named>() -> impl TypedValueParser<Value = T> {
 
 /// `graspmap eval`.
 #[derive(Debug, Args)]
-pub struct EvalArgs {
+pub(crate) struct EvalArgs {
     /// Which evaluation to run.
     #[arg(long, value_parser = named::<Task>())]
-    pub task: Task,
+    pub(crate) task: Task,
     /// Who chooses the grasps.
     #[arg(long, value_parser = named::<PolicyKind>(), default_value = "model")]
-    pub policy: PolicyKind,
+    pub(crate) policy: PolicyKind,
     /// Model weights [default: DATA/affordance/best.safetensors].
     #[arg(long, value_name = "PATH")]
-    pub checkpoint: Option<PathBuf>,
+    pub(crate) checkpoint: Option<PathBuf>,
     /// Base seed: train/test attempt a of object i drops with seed + 100·i + a + 10000;
     /// empty_bin drops all objects with it [default: 0, empty_bin 2].
     #[arg(long, conflicts_with = "seeds")]
-    pub seed: Option<u64>,
+    pub(crate) seed: Option<u64>,
     /// Several base seeds, aggregated: a list and/or ranges, e.g. 1-10 or 0,1000,2000.
     #[arg(long, value_name = "LIST", value_parser = parse_seed_list)]
-    pub seeds: Option<SeedList>,
+    pub(crate) seeds: Option<SeedList>,
     /// Failure suppression: lower the affordance around the last N failed actions (0 = off).
     #[arg(
         long = "n_past_action",
@@ -185,67 +185,67 @@ pub struct EvalArgs {
         value_name = "N",
         default_value_t = 0
     )]
-    pub n_past_action: usize,
+    pub(crate) n_past_action: usize,
     /// Suppression: standard deviation of the subtracted Gaussian in pixels.
     #[arg(long, value_name = "PX", default_value_t = 4.0, value_parser = positive::<f32>)]
-    pub suppression_sigma: f32,
+    pub(crate) suppression_sigma: f32,
     /// Suppression: also lower the rotations within this many 22.5° bins of the failed one
     /// (0 = its own rotation only, 4 = all).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=4))]
-    pub suppress_rotation_reach: u8,
+    pub(crate) suppress_rotation_reach: u8,
     /// Suppression: remember successful actions too, not only failures.
     #[arg(long)]
-    pub suppress_successes: bool,
+    pub(crate) suppress_successes: bool,
     /// Model policy: before the argmax, zero the grasps whose open gripper would hit a tote wall
     /// (walls) or also land on a surface seen in the depth image (full); off = plain argmax.
     #[arg(long, value_parser = named::<CollisionCheck>(), default_value = "full")]
-    pub collision_check: CollisionCheck,
+    pub(crate) collision_check: CollisionCheck,
     /// Model policy: execute the first of the N best actions (after suppression and the
     /// collision check) that passes the planner's depth test: the object fits the open jaw with
     /// room to spare, both pads come down in free space and seen, and they close on flat faces
     /// across the object, not on an edge; the argmax when none passes (0 = plain argmax).
     #[arg(long, value_name = "N", default_value_t = 200)]
-    pub verify_top: usize,
+    pub(crate) verify_top: usize,
     /// Model policy: move the chosen grasp to the middle of the surface under it, turning it to
     /// an angle that fits there if needed (needs `--collision-check full`). Off by default: it
     /// moves more objects in empty_bin but picks fewer training objects (BENCHMARKS.md).
     #[arg(long)]
-    pub centring: bool,
+    pub(crate) centring: bool,
     /// empty_bin: most pick attempts per scene.
     #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
-    pub max_attempts: u32,
+    pub(crate) max_attempts: u32,
     /// Write the episode video: an oblique view beside the camera view with the chosen grasp
     /// (one seed only).
     #[arg(long, value_name = "GIF", conflicts_with = "seeds")]
-    pub record: Option<PathBuf>,
+    pub(crate) record: Option<PathBuf>,
     /// Arithmetic of the network.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
-    pub precision: PrecisionChoice,
+    pub(crate) precision: PrecisionChoice,
 }
 
 /// `graspmap predict`.
 #[derive(Debug, Args)]
-pub struct PredictArgs {
+pub(crate) struct PredictArgs {
     /// A 128 × 128 RGB image (PNG or JPEG) seen from the top-down camera.
     #[arg(long, value_name = "IMAGE")]
-    pub image: PathBuf,
+    pub(crate) image: PathBuf,
     /// Model weights [default: DATA/affordance/best.safetensors].
     #[arg(long, value_name = "PATH")]
-    pub checkpoint: Option<PathBuf>,
+    pub(crate) checkpoint: Option<PathBuf>,
     /// Where to write the 512 × 512 visualisation [default: DATA/affordance/predict_vis/<image stem>.png].
     #[arg(long, value_name = "PNG")]
-    pub out: Option<PathBuf>,
+    pub(crate) out: Option<PathBuf>,
     /// Arithmetic of the network.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
-    pub precision: PrecisionChoice,
+    pub(crate) precision: PrecisionChoice,
 }
 
 /// Seeds given as a list and/or ranges.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct SeedList(pub Vec<u64>);
+pub(crate) struct SeedList(pub(crate) Vec<u64>);
 
 /// Parses `1-10`, `0,1000,2000` or a mix such as `1-3,7`.
-pub fn parse_seed_list(text: &str) -> Result<SeedList, String> {
+pub(crate) fn parse_seed_list(text: &str) -> Result<SeedList, String> {
     let fail =
         |why: &str| format!("'{text}' {why}; use a list and/or ranges such as 1-10 or 0,1000,2000");
     let mut seeds = Vec::new();
@@ -288,37 +288,37 @@ fn positive<T: std::str::FromStr + PartialOrd + Default + Copy + Into<f64>>(
 /// `graspmap label`.
 #[derive(Debug, Args)]
 #[command(group = clap::ArgGroup::new("clicker").args(["clicks", "interactive"]))]
-pub struct LabelArgs {
+pub(crate) struct LabelArgs {
     /// Successful labels wanted per training object.
     #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(1..))]
-    pub per_object: u32,
+    pub(crate) per_object: u32,
     /// Rounds allowed per object before giving up on it (an error naming the object).
     #[arg(long, default_value_t = 40, value_parser = clap::value_parser!(u32).range(1..))]
-    pub max_rounds: u32,
+    pub(crate) max_rounds: u32,
     /// Base seed: round r of training object j drops with seed + 100·j + r.
     #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// Take clicks from a JSON list of {"object", "x", "y", "angle"}, in order, one per round.
     #[arg(long, value_name = "FILE")]
-    pub clicks: Option<PathBuf>,
+    pub(crate) clicks: Option<PathBuf>,
     /// Click by hand: the image goes to --preview, commands come from stdin.
     #[arg(long)]
-    pub interactive: bool,
+    pub(crate) interactive: bool,
     /// Where --interactive writes the image with the cursor's grasp [default: DATA/labels/preview.png].
     #[arg(long, value_name = "PNG", requires = "interactive")]
-    pub preview: Option<PathBuf>,
+    pub(crate) preview: Option<PathBuf>,
     /// Scripted clicks: standard deviation of the click position noise in pixels.
     #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
-    pub click_noise_px: f32,
+    pub(crate) click_noise_px: f32,
     /// Scripted clicks: standard deviation of the angle noise in degrees (before snapping to 22.5°).
     #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
-    pub angle_noise_deg: f32,
+    pub(crate) angle_noise_deg: f32,
     /// Delete existing labels and start over.
     #[arg(long, conflicts_with = "check")]
-    pub force: bool,
+    pub(crate) force: bool,
     /// Only validate the existing dataset; exit 2 if anything is wrong.
     #[arg(long, conflicts_with_all = ["clicks", "interactive"])]
-    pub check: bool,
+    pub(crate) check: bool,
 }
 
 fn non_negative(text: &str) -> Result<f32, String> {
@@ -330,34 +330,34 @@ fn non_negative(text: &str) -> Result<f32, String> {
 
 /// `graspmap scene`.
 #[derive(Debug, Args)]
-pub struct SceneArgs {
+pub(crate) struct SceneArgs {
     /// Comma-separated object names, dropped in this order.
     #[arg(long, value_delimiter = ',', required = true, num_args = 1..)]
-    pub objects: Vec<String>,
+    pub(crate) objects: Vec<String>,
     /// Seed of the drop poses.
     #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// Output RGB image (.png).
     #[arg(long, value_name = "PNG")]
-    pub out: PathBuf,
+    pub(crate) out: PathBuf,
     /// Also write the depth image as 16-bit PNG in millimetres.
     #[arg(long, value_name = "PNG")]
-    pub depth: Option<PathBuf>,
+    pub(crate) depth: Option<PathBuf>,
 }
 
 /// `graspmap grasp`.
 #[derive(Debug, Args)]
 #[command(group = clap::ArgGroup::new("policy").required(true).args(["pixel", "oracle", "random"]))]
-pub struct GraspArgs {
+pub(crate) struct GraspArgs {
     /// Object to drop into bin 1.
     #[arg(long)]
-    pub object: String,
+    pub(crate) object: String,
     /// Seed of the drop pose (and of --random's choice).
     #[arg(long, default_value_t = 0)]
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// Grasp centre as column,row in the 128 × 128 image (needs --angle).
     #[arg(long, value_name = "U,V", requires = "angle")]
-    pub pixel: Option<String>,
+    pub(crate) pixel: Option<String>,
     /// Grasp angle in degrees, clockwise in the image; normalised mod 180.
     #[arg(
         long,
@@ -365,26 +365,26 @@ pub struct GraspArgs {
         allow_negative_numbers = true,
         requires = "pixel"
     )]
-    pub angle: Option<f64>,
+    pub(crate) angle: Option<f64>,
     /// Let the oracle planner choose the grasp from ground-truth mask and depth.
     #[arg(long)]
-    pub oracle: bool,
+    pub(crate) oracle: bool,
     /// A uniformly random pixel on bin 1's floor area and a random angle.
     #[arg(long)]
-    pub random: bool,
+    pub(crate) random: bool,
     /// Write an animated GIF of the attempt from an oblique view.
     #[arg(long, value_name = "GIF")]
-    pub record: Option<PathBuf>,
+    pub(crate) record: Option<PathBuf>,
     /// Grip force per finger in newtons.
     #[arg(long, default_value_t = 40.0, value_parser = positive::<f32>)]
-    pub grip_force: f32,
+    pub(crate) grip_force: f32,
     /// Also save the camera image with the grasp drawn (.png).
     #[arg(long, value_name = "PNG")]
-    pub image: Option<PathBuf>,
+    pub(crate) image: Option<PathBuf>,
 }
 
 /// Parses a `U,V` pixel and checks that it lies in the 128 × 128 image.
-pub fn parse_pixel(text: &str) -> anyhow::Result<(u32, u32)> {
+pub(crate) fn parse_pixel(text: &str) -> anyhow::Result<(u32, u32)> {
     let parts: Vec<&str> = text.split(',').map(str::trim).collect();
     let [u, v] = parts.as_slice() else {
         bail!("--pixel '{text}' must be two integers U,V, e.g. --pixel 64,70");

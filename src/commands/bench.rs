@@ -23,20 +23,20 @@ const PEER_SETUP: &str = "scripts/setup-bench-peer.sh";
 
 /// What `graspmap bench train` measures.
 #[derive(Debug, Clone)]
-pub struct BenchConfig {
+pub(crate) struct BenchConfig {
     /// Timed steps per block and side (after the warm-up).
-    pub steps: u32,
+    pub(crate) steps: u32,
     /// Blocks per side, alternating Rust and Python.
-    pub rounds: u32,
+    pub(crate) rounds: u32,
     /// Precision of both sides.
-    pub precision: Precision,
+    pub(crate) precision: Precision,
     /// The peer's Python; `None` times the Rust side only.
-    pub peer: Option<PeerPython>,
+    pub(crate) peer: Option<PeerPython>,
 }
 
 /// Which Python runs the peer.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub enum PeerPython {
+pub(crate) enum PeerPython {
     /// `.venv-bench/bin/python` under the current directory, installed on first use.
     Checkout,
     /// A Python with torch 2.13 that the user named.
@@ -121,7 +121,7 @@ fn timed(steps: usize, mut step: impl FnMut()) -> Vec<f64> {
 }
 
 /// Runs the command.
-pub fn run(context: &Context, args: BenchConfig) -> anyhow::Result<()> {
+pub(crate) fn run(context: &Context, args: BenchConfig) -> anyhow::Result<()> {
     let precision = args.precision;
     crate::model::use_threads(context.threads);
     tch::manual_seed(0);

@@ -18,24 +18,24 @@ use crate::sim::{Workcell, WorkcellConfig};
 
 /// One `graspmap grasp` attempt, resolved by the CLI.
 #[derive(Debug, Clone)]
-pub struct GraspConfig {
+pub(crate) struct GraspConfig {
     /// Object to drop into bin 1.
-    pub object: String,
+    pub(crate) object: String,
     /// Seed of the drop pose (and of the random grasp).
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// Where the grasp comes from.
-    pub choice: GraspChoice,
+    pub(crate) choice: GraspChoice,
     /// The workcell (grip force).
-    pub workcell: WorkcellConfig,
+    pub(crate) workcell: WorkcellConfig,
     /// Where to write the attempt's animated GIF.
-    pub record: Option<PathBuf>,
+    pub(crate) record: Option<PathBuf>,
     /// Where to save the camera image with the grasp drawn.
-    pub image: Option<PathBuf>,
+    pub(crate) image: Option<PathBuf>,
 }
 
 /// Who picks the grasp.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum GraspChoice {
+pub(crate) enum GraspChoice {
     /// The user's pixel and angle.
     Given(PixelGrasp),
     /// The planner, from mask and depth.
@@ -47,7 +47,7 @@ pub enum GraspChoice {
 /// How the grasp was chosen.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
-pub enum GraspSource {
+pub(crate) enum GraspSource {
     /// --pixel/--angle.
     Given,
     /// --oracle.
@@ -58,31 +58,31 @@ pub enum GraspSource {
 
 /// Everything `grasp --json` reports.
 #[derive(Debug, serde::Serialize)]
-pub struct GraspResults {
+pub(crate) struct GraspResults {
     /// Whether the object was picked and placed.
-    pub success: bool,
+    pub(crate) success: bool,
     /// Why the attempt ended so.
-    pub reason: PickReason,
+    pub(crate) reason: PickReason,
     /// Human-readable detail.
-    pub detail: String,
+    pub(crate) detail: String,
     /// The dropped object.
-    pub object: String,
+    pub(crate) object: String,
     /// Grasp pixel [u, v], absent when the oracle found none.
-    pub pixel: Option<[u32; 2]>,
+    pub(crate) pixel: Option<[u32; 2]>,
     /// Grasp angle in degrees.
-    pub angle_deg: Option<f32>,
+    pub(crate) angle_deg: Option<f32>,
     /// How the grasp was chosen.
-    pub source: GraspSource,
+    pub(crate) source: GraspSource,
     /// Wall-clock seconds, drop to placed.
-    pub wall_seconds: f64,
+    pub(crate) wall_seconds: f64,
     /// Simulated seconds, drop to placed.
-    pub sim_seconds: f64,
+    pub(crate) sim_seconds: f64,
     /// Wall seconds spent rendering the camera image.
-    pub render_seconds: f64,
+    pub(crate) render_seconds: f64,
 }
 
 /// Runs the command.
-pub fn run(context: &Context, args: GraspConfig) -> anyhow::Result<()> {
+pub(crate) fn run(context: &Context, args: GraspConfig) -> anyhow::Result<()> {
     let start = Instant::now();
     let model = context.objects.load(&args.object)?;
     let config = args.workcell.clone();
@@ -173,6 +173,6 @@ fn result_line(r: &GraspResults, seed: u64) -> String {
 }
 
 /// Physics steps between recorded frames (240 Hz / 10 = 24 fps).
-pub const RECORD_EVERY_STEPS: u64 = 10;
+pub(crate) const RECORD_EVERY_STEPS: u64 = 10;
 /// GIF frame delay in hundredths of a second, matching `RECORD_EVERY_STEPS`.
-pub const RECORD_DELAY_CS: u32 = 4;
+pub(crate) const RECORD_DELAY_CS: u32 = 4;

@@ -1,14 +1,14 @@
 //! Commands: each orchestrates the core, the objects and the simulator, and owns all printing.
 
-pub mod bench;
-pub mod eval;
-pub mod grasp;
-pub mod label;
-pub mod predict;
-pub mod report;
-pub mod scene;
-pub mod train;
-pub mod video;
+pub(crate) mod bench;
+pub(crate) mod eval;
+pub(crate) mod grasp;
+pub(crate) mod label;
+pub(crate) mod predict;
+pub(crate) mod report;
+pub(crate) mod scene;
+pub(crate) mod train;
+pub(crate) mod video;
 
 use std::path::{Path, PathBuf};
 
@@ -16,19 +16,19 @@ use crate::assets::objects::{ObjectLibrary, Split, SplitFile};
 
 /// Settings shared by every command, resolved once by the CLI from the global flags.
 #[derive(Debug, Clone)]
-pub struct Context {
+pub(crate) struct Context {
     /// Data directory.
-    pub data: PathBuf,
+    pub(crate) data: PathBuf,
     /// Object models.
-    pub objects: ObjectLibrary,
+    pub(crate) objects: ObjectLibrary,
     /// The train/test split.
-    pub split: SplitFile,
+    pub(crate) split: SplitFile,
     /// Worker threads.
-    pub threads: u16,
+    pub(crate) threads: u16,
     /// Where to write JSON results.
-    pub json: Option<PathBuf>,
+    pub(crate) json: Option<PathBuf>,
     /// No progress output.
-    pub quiet: bool,
+    pub(crate) quiet: bool,
 }
 
 /// How the context appears as `"global"` in every report: the same keys as ever, with the
@@ -53,12 +53,12 @@ impl serde::Serialize for Context {
 
 impl Context {
     /// The split, read on demand.
-    pub fn split(&self) -> anyhow::Result<Split> {
+    pub(crate) fn split(&self) -> anyhow::Result<Split> {
         Ok(self.split.read()?)
     }
 
     /// Prints a human-readable result line: to stdout, unless the JSON report goes there.
-    pub fn say(&self, line: &str) {
+    pub(crate) fn say(&self, line: &str) {
         if self.json.as_deref() == Some(Path::new("-")) {
             eprintln!("{line}");
         } else {
@@ -68,7 +68,7 @@ impl Context {
 
     /// A progress bar with ETA over `len` `unit`s, `done` already: drawn on a terminal,
     /// hidden under `--quiet`, in CI and when stderr is redirected.
-    pub fn progress_bar(&self, unit: &str, len: u64, done: u64) -> indicatif::ProgressBar {
+    pub(crate) fn progress_bar(&self, unit: &str, len: u64, done: u64) -> indicatif::ProgressBar {
         use std::io::IsTerminal;
         if self.quiet || !std::io::stderr().is_terminal() {
             return indicatif::ProgressBar::hidden();

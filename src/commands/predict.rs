@@ -16,40 +16,40 @@ use crate::policy::affordance::{visualisation, Choice};
 
 /// What `graspmap predict` reads and writes, resolved by the CLI.
 #[derive(Debug, Clone)]
-pub struct PredictConfig {
+pub(crate) struct PredictConfig {
     /// A 128 × 128 RGB image (PNG or JPEG).
-    pub image: PathBuf,
+    pub(crate) image: PathBuf,
     /// The model's weights.
-    pub checkpoint: PathBuf,
+    pub(crate) checkpoint: PathBuf,
     /// Where the 512 × 512 visualisation goes.
-    pub out: PathBuf,
+    pub(crate) out: PathBuf,
     /// Arithmetic of the network.
-    pub precision: Precision,
+    pub(crate) precision: Precision,
 }
 
 /// Everything `predict --json` reports.
 #[derive(Debug, serde::Serialize)]
-pub struct PredictResults {
+pub(crate) struct PredictResults {
     /// The input image.
-    pub image: std::path::PathBuf,
+    pub(crate) image: std::path::PathBuf,
     /// Grasp centre column in the input image.
-    pub x: u32,
+    pub(crate) x: u32,
     /// Grasp centre row.
-    pub y: u32,
+    pub(crate) y: u32,
     /// Grasp angle in degrees (clockwise, a multiple of 22.5).
-    pub angle: f32,
+    pub(crate) angle: f32,
     /// Affordance at the chosen pixel, in [0, 1].
-    pub score: f32,
+    pub(crate) score: f32,
     /// The full choice (bin and rotated pixel).
-    pub choice: Choice,
+    pub(crate) choice: Choice,
     /// Where the visualisation went.
-    pub vis: std::path::PathBuf,
+    pub(crate) vis: std::path::PathBuf,
     /// Wall seconds of the network (8 rotations, one batch).
-    pub network_seconds: f64,
+    pub(crate) network_seconds: f64,
 }
 
 /// Runs the command.
-pub fn run(context: &Context, args: PredictConfig) -> anyhow::Result<()> {
+pub(crate) fn run(context: &Context, args: PredictConfig) -> anyhow::Result<()> {
     let image = read_observation(&args.image)?;
     let checkpoint = &args.checkpoint;
     crate::model::use_threads(context.threads);
@@ -95,7 +95,7 @@ pub fn run(context: &Context, args: PredictConfig) -> anyhow::Result<()> {
 }
 
 /// Reads a 128 × 128 8-bit RGB image (an opaque RGBA one is accepted), or says what is wrong.
-pub fn read_observation(path: &Path) -> anyhow::Result<RgbImage> {
+pub(crate) fn read_observation(path: &Path) -> anyhow::Result<RgbImage> {
     let decoded = image::ImageReader::open(path)
         .with_context(|| format!("cannot open --image {}", path.display()))?
         .with_guessed_format()

@@ -9,23 +9,23 @@ use crate::data::atomic::write_atomic;
 
 /// The envelope of every `--json` report.
 #[derive(Debug, Serialize)]
-pub struct Report<'a, C: Serialize, R: Serialize> {
+pub(crate) struct Report<'a, C: Serialize, R: Serialize> {
     /// `graspmap.<command>/1`.
-    pub schema: String,
+    pub(crate) schema: String,
     /// Crate version.
-    pub version: &'static str,
+    pub(crate) version: &'static str,
     /// Git commit the binary was built from.
-    pub git_commit: &'static str,
+    pub(crate) git_commit: &'static str,
     /// Seeds that drove the run.
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// The fully resolved configuration.
-    pub config: &'a C,
+    pub(crate) config: &'a C,
     /// The command's results.
-    pub results: &'a R,
+    pub(crate) results: &'a R,
 }
 
 /// Writes a report to `target` (`-` = stdout) with schema `graspmap.<command>/1`.
-pub fn write_report<C: Serialize, R: Serialize>(
+pub(crate) fn write_report<C: Serialize, R: Serialize>(
     target: &Path,
     command: &str,
     seed: u64,

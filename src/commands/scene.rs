@@ -13,15 +13,15 @@ use crate::sim::{Workcell, WorkcellConfig};
 
 /// What `graspmap scene` drops and where it writes the views.
 #[derive(Debug, Clone)]
-pub struct SceneConfig {
+pub(crate) struct SceneConfig {
     /// Object names, dropped in this order.
-    pub objects: Vec<String>,
+    pub(crate) objects: Vec<String>,
     /// Seed of the drop poses.
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// The RGB image (.png).
-    pub out: PathBuf,
+    pub(crate) out: PathBuf,
     /// The depth image as 16-bit PNG in millimetres, if wanted.
-    pub depth: Option<PathBuf>,
+    pub(crate) depth: Option<PathBuf>,
 }
 
 #[derive(serde::Serialize)]
@@ -43,7 +43,7 @@ struct ObjectResult {
 }
 
 /// Runs the command.
-pub fn run(context: &Context, args: SceneConfig) -> anyhow::Result<()> {
+pub(crate) fn run(context: &Context, args: SceneConfig) -> anyhow::Result<()> {
     let start = Instant::now();
     let models = context.objects.load_all(&args.objects)?;
     let config = WorkcellConfig::default();

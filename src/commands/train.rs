@@ -22,11 +22,11 @@ use crate::vision::colormap::viridis;
 
 /// What `graspmap train` runs.
 #[derive(Debug, Clone)]
-pub struct TrainOptions {
+pub(crate) struct TrainOptions {
     /// The training run's settings.
-    pub config: TrainConfig,
+    pub(crate) config: TrainConfig,
     /// Continue from DATA/affordance/last.* exactly where it stopped.
-    pub resume: bool,
+    pub(crate) resume: bool,
 }
 
 #[derive(Debug, serde::Serialize)]
@@ -52,7 +52,7 @@ struct Run {
 }
 
 /// Runs the command.
-pub fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()> {
+pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()> {
     let config = options.config;
     crate::model::use_threads(context.threads);
     tch::manual_seed(config.seed as i64);

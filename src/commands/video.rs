@@ -12,7 +12,7 @@ use crate::data::atomic::write_atomic;
 /// each pixel finds its palette entry through a 32 × 32 × 32 lookup table. The workcell's colours
 /// barely change from frame to frame, and quantising every frame on its own took most of an
 /// episode video's time (25 s of 2,500 frames against about 3 s this way).
-pub fn save_gif_atomic(
+pub(crate) fn save_gif_atomic(
     frames: &[image::RgbImage],
     delay_cs: u32,
     path: &Path,

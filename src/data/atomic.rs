@@ -9,7 +9,7 @@ use std::path::Path;
 use anyhow::Context;
 
 /// Writes `bytes` to `path` atomically: a killed process leaves either the old file or the new one.
-pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
+pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
@@ -38,7 +38,10 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
 }
 
 /// Saves an image atomically; the format follows the extension.
-pub fn save_image_atomic<P, C>(image: &image::ImageBuffer<P, C>, path: &Path) -> anyhow::Result<()>
+pub(crate) fn save_image_atomic<P, C>(
+    image: &image::ImageBuffer<P, C>,
+    path: &Path,
+) -> anyhow::Result<()>
 where
     P: image::PixelWithColorType,
     [P::Subpixel]: image::EncodableLayout,

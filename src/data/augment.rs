@@ -21,6 +21,17 @@ pub struct AugmentConfig {
     pub max_rotate_deg: f32,
 }
 
+impl AugmentConfig {
+    /// Every sample augmented, with the default ranges: what the property tests exercise.
+    #[cfg(test)]
+    pub(crate) fn always() -> Self {
+        Self {
+            probability: 1.0,
+            ..Self::default()
+        }
+    }
+}
+
 impl Default for AugmentConfig {
     fn default() -> Self {
         Self {
@@ -38,7 +49,7 @@ impl Default for AugmentConfig {
 ///
 /// Draws from `rng` in a fixed order (apply?, angle, dx, dy), and nothing more when the sample
 /// is not augmented, so a seeded generator reproduces the same augmentations.
-pub fn augment(
+pub(crate) fn augment(
     image: &RgbImage,
     fingers: [[f32; 2]; 2],
     config: &AugmentConfig,
@@ -63,7 +74,7 @@ pub fn augment(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::grasp::rotate::test_images::{blob, brightest, dist};
+    use crate::grasp::rotate::test_images::{blob, brightest, dist, random_grasp};
     use crate::grasp::{
         fingers, grasp_from_fingers, normalize_angle, PixelGrasp, FINGER_OFFSET_PX,
     };
@@ -74,18 +85,11 @@ mod tests {
     fn augmentation_moves_fingers_with_the_image() {
         // Property, over 300 seeded draws: a blob at the grasp centre is still under the centre
         // of the transformed fingers after augmentation.
-        let config = AugmentConfig {
-            probability: 1.0,
-            ..AugmentConfig::default()
-        };
+        let config = AugmentConfig::always();
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         let mut checked = 0;
         for _ in 0..300 {
-            let grasp = PixelGrasp {
-                u: rng.random_range(20..108),
-                v: rng.random_range(20..108),
-                angle_deg: rng.random_range(0.0..180.0),
-            };
+            let grasp = random_grasp(&mut rng, 20..108);
             let f = fingers(grasp);
             let image = blob(128, grasp_from_fingers(f).0);
             let (augmented, moved) = augment(&image, f, &config, &mut rng);

@@ -16,28 +16,28 @@ use crate::grasp::rotate::{rotate_image, rotate_point};
 use crate::grasp::{angle_bin, bin_angle, fingers, grasp_from_fingers, PixelGrasp, IMAGE_SIZE};
 
 /// Standard deviation of the target Gaussian, in pixels (ref).
-pub const TARGET_SIGMA_PX: f32 = 1.0;
+pub(crate) const TARGET_SIGMA_PX: f32 = 1.0;
 /// How often [`training_sample`] redraws an augmentation that pushes the grasp centre out of the
 /// image before it falls back to the unaugmented sample.
-pub const MAX_AUGMENT_TRIES: usize = 10;
+pub(crate) const MAX_AUGMENT_TRIES: usize = 10;
 
 /// One network example, already rotated into its angle bin.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sample {
     /// Rotated image, 3 × H × W (CHW), RGB in [0, 1].
-    pub input: Vec<f32>,
+    pub(crate) input: Vec<f32>,
     /// H × W Gaussian (σ = 1 px, peak 1) at the pixel holding the rotated grasp centre.
     pub target: Vec<f32>,
     /// Angle bin of the grasp; the image was rotated by −bin · 22.5°.
-    pub bin: usize,
+    pub(crate) bin: usize,
     /// Rotated grasp centre in continuous image coordinates (may lie outside the image).
-    pub center: [f32; 2],
+    pub(crate) center: [f32; 2],
 }
 
 impl Sample {
     /// The pixel (column, row) that holds [`Sample::center`] and the target's peak, or `None`
     /// when the centre lies outside a `size` × `size` image (the target is then all zero).
-    pub fn center_pixel(&self, size: u32) -> Option<(u32, u32)> {
+    pub(crate) fn center_pixel(&self, size: u32) -> Option<(u32, u32)> {
         let [x, y] = self.center.map(f32::floor);
         let inside = |c: f32| (0.0..size as f32).contains(&c);
         (inside(x) && inside(y)).then_some((x as u32, y as u32))
@@ -53,7 +53,7 @@ impl Sample {
 /// and a Gaussian there would peak anywhere between e^(−1/4) ≈ 0.78 and 1, split over up to four
 /// pixels. Snapping keeps the peak at exactly 1 on one pixel, the pixel that prediction's argmax
 /// reads back.
-pub fn make_sample(image: &RgbImage, grasp_fingers: [[f32; 2]; 2]) -> Sample {
+pub(crate) fn make_sample(image: &RgbImage, grasp_fingers: [[f32; 2]; 2]) -> Sample {
     let (w, h) = image.dimensions();
     assert_eq!(w, h, "square images only (got {w}×{h})");
     let (centre, angle) = grasp_from_fingers(grasp_fingers);
@@ -87,7 +87,7 @@ pub fn make_sample(image: &RgbImage, grasp_fingers: [[f32; 2]; 2]) -> Sample {
 
 /// Writes an RGB image into `out` as the network's input: 3 × H × W (CHW), each value in
 /// [0, 1]. The one conversion that training and prediction share, so both see the same numbers.
-pub fn write_chw(image: &RgbImage, out: &mut [f32]) {
+pub(crate) fn write_chw(image: &RgbImage, out: &mut [f32]) {
     let plane = (image.width() * image.height()) as usize;
     assert_eq!(out.len(), 3 * plane, "one CHW image");
     for (i, pixel) in image.pixels().enumerate() {
@@ -101,13 +101,13 @@ pub fn write_chw(image: &RgbImage, out: &mut [f32]) {
 #[derive(Debug, Clone, PartialEq)]
 pub struct LabelledImage {
     /// Object name.
-    pub object: String,
+    pub(crate) object: String,
     /// 1-based index among that object's labels (the k in `<Object>_<k>_rgb.png`).
-    pub k: usize,
+    pub(crate) k: usize,
     /// The 128 × 128 RGB observation.
-    pub image: RgbImage,
+    pub(crate) image: RgbImage,
     /// The labelled grasp.
-    pub grasp: PixelGrasp,
+    pub(crate) grasp: PixelGrasp,
 }
 
 /// Reads labels.json and every image it lists, in file order. Fails, naming the file, when
@@ -162,7 +162,7 @@ pub fn load_dataset(store: &LabelStore) -> anyhow::Result<Vec<LabelledImage>> {
 /// Shuffles 0..n with ChaCha8 seeded by `seed` and splits it 90/10 into (train, validation), each
 /// sorted. Validation gets n − ⌊0.9 n⌋ items, as the ref's `int(0.9 * n)` train size, which is at
 /// least 1 for n ≥ 2; a single sample goes to training.
-pub fn split_train_validation(n: usize, seed: u64) -> (Vec<usize>, Vec<usize>) {
+pub(crate) fn split_train_validation(n: usize, seed: u64) -> (Vec<usize>, Vec<usize>) {
     let mut order: Vec<usize> = (0..n).collect();
     order.shuffle(&mut ChaCha8Rng::seed_from_u64(seed));
     let n_train = if n < 2 { n } else { n * 9 / 10 };
@@ -195,8 +195,8 @@ pub fn training_sample(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::grasp::rotate::test_images::random_grasp;
     use crate::grasp::BINS;
-    use rand::Rng;
     use std::path::Path;
 
     fn fixture() -> LabelStore {
@@ -237,6 +237,16 @@ mod tests {
     }
 
     /// Black image with white Gaussian blobs (σ = 1.5 px) at the given points.
+    /// A label whose image has one blob at its grasp centre.
+    fn blob_item(grasp: PixelGrasp) -> LabelledImage {
+        LabelledImage {
+            object: "Blob".into(),
+            k: 1,
+            image: blobs(&[[grasp.u as f32 + 0.5, grasp.v as f32 + 0.5]]),
+            grasp,
+        }
+    }
+
     fn blobs(points: &[[f32; 2]]) -> RgbImage {
         RgbImage::from_fn(128, 128, |u, v| {
             let g: f32 = points
@@ -368,24 +378,11 @@ mod tests {
     fn augmented_samples_keep_the_target_on_the_grasp() {
         // Property over 250 seeded draws, through the whole training path: a blob at the grasp
         // centre ends up under the target's peak (both in the rotated frame).
-        let config = AugmentConfig {
-            probability: 1.0,
-            ..AugmentConfig::default()
-        };
+        let config = AugmentConfig::always();
         let mut rng = ChaCha8Rng::seed_from_u64(11);
         let mut checked = 0;
         for _ in 0..250 {
-            let grasp = PixelGrasp {
-                u: rng.random_range(30..98),
-                v: rng.random_range(30..98),
-                angle_deg: rng.random_range(0.0..180.0),
-            };
-            let item = LabelledImage {
-                object: "Blob".into(),
-                k: 1,
-                image: blobs(&[[grasp.u as f32 + 0.5, grasp.v as f32 + 0.5]]),
-                grasp,
-            };
+            let item = blob_item(random_grasp(&mut rng, 30..98));
             let sample = training_sample(&item, Some((&config, &mut rng)));
             let Some(peak) = sample.center_pixel(128) else {
                 continue;
@@ -401,7 +398,8 @@ mod tests {
             .sqrt();
             assert!(
                 d <= 1.0,
-                "{grasp:?}: brightest input pixel {bright:?}, target peak {peak:?}"
+                "{:?}: brightest input pixel {bright:?}, target peak {peak:?}",
+                item.grasp
             );
         }
         assert!(checked > 200, "only {checked} samples checked");
@@ -409,23 +407,15 @@ mod tests {
 
     #[test]
     fn validation_samples_are_not_augmented() {
-        let item = LabelledImage {
-            object: "Blob".into(),
-            k: 1,
-            image: blobs(&[[40.5, 80.5]]),
-            grasp: PixelGrasp {
-                u: 40,
-                v: 80,
-                angle_deg: 45.0,
-            },
-        };
+        let item = blob_item(PixelGrasp {
+            u: 40,
+            v: 80,
+            angle_deg: 45.0,
+        });
         let plain = training_sample(&item, None);
         assert_eq!(plain, make_sample(&item.image, fingers(item.grasp)));
         let mut rng = ChaCha8Rng::seed_from_u64(0);
-        let config = AugmentConfig {
-            probability: 1.0,
-            ..AugmentConfig::default()
-        };
+        let config = AugmentConfig::always();
         assert_ne!(training_sample(&item, Some((&config, &mut rng))), plain);
     }
 
@@ -433,20 +423,12 @@ mod tests {
     fn augmentations_that_lose_the_grasp_are_redrawn() {
         // A grasp 3 px from the corner: many draws translate it off the image, yet every
         // training sample keeps its target peak inside.
-        let corner = LabelledImage {
-            object: "Blob".into(),
-            k: 1,
-            image: blobs(&[[3.5, 3.5]]),
-            grasp: PixelGrasp {
-                u: 3,
-                v: 3,
-                angle_deg: 0.0,
-            },
-        };
-        let config = AugmentConfig {
-            probability: 1.0,
-            ..AugmentConfig::default()
-        };
+        let corner = blob_item(PixelGrasp {
+            u: 3,
+            v: 3,
+            angle_deg: 0.0,
+        });
+        let config = AugmentConfig::always();
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         for _ in 0..200 {
             let sample = training_sample(&corner, Some((&config, &mut rng)));

@@ -14,7 +14,7 @@ use super::atomic::{save_image_atomic, write_atomic};
 use crate::grasp::{PixelGrasp, IMAGE_SIZE};
 
 /// The labels file name inside the labels directory.
-pub const LABELS_FILE: &str = "labels.json";
+pub(crate) const LABELS_FILE: &str = "labels.json";
 
 /// One labelled grasp: integer pixel and angle in degrees.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -92,7 +92,7 @@ impl Labels {
     /// and any others after them as they were. Objects without labels are not written, so a
     /// file left by a killed run lists whichever object was labelled first; arranged like this,
     /// the resumed file's order follows the split, whoever labels first.
-    pub fn arrange(&mut self, order: &[String]) {
+    pub(crate) fn arrange(&mut self, order: &[String]) {
         let mut rest = std::mem::take(&mut self.entries);
         for object in order {
             let labels = match rest.iter().position(|(name, _)| name == object) {
@@ -105,7 +105,7 @@ impl Labels {
     }
 
     /// Appends a label for `object`; returns its 1-based index k.
-    pub fn push(&mut self, object: &str, label: Label) -> usize {
+    pub(crate) fn push(&mut self, object: &str, label: Label) -> usize {
         match self.entries.iter_mut().find(|(name, _)| name == object) {
             Some((_, labels)) => {
                 labels.push(label);
@@ -202,7 +202,7 @@ impl LabelStore {
     }
 
     /// Its directory.
-    pub fn dir(&self) -> &Path {
+    pub(crate) fn dir(&self) -> &Path {
         &self.dir
     }
 
@@ -212,13 +212,13 @@ impl LabelStore {
     }
 
     /// Path of the k-th image of an object.
-    pub fn image_path(&self, object: &str, k: usize) -> PathBuf {
+    pub(crate) fn image_path(&self, object: &str, k: usize) -> PathBuf {
         self.dir.join(format!("{object}_{k}_rgb.png"))
     }
 
     /// Deletes temporary files a killed run left behind (they are never read, but would
     /// otherwise pile up beside the dataset).
-    pub fn remove_stale_temporaries(&self) -> anyhow::Result<()> {
+    pub(crate) fn remove_stale_temporaries(&self) -> anyhow::Result<()> {
         let Ok(entries) = std::fs::read_dir(&self.dir) else {
             return Ok(());
         };
@@ -244,7 +244,7 @@ impl LabelStore {
     }
 
     /// Appends one label: image first, then labels.json, each atomically.
-    pub fn append(
+    pub(crate) fn append(
         &self,
         labels: &mut Labels,
         object: &str,
@@ -259,7 +259,7 @@ impl LabelStore {
     }
 
     /// Removes labels.json and every label image (for `--force`).
-    pub fn clear(&self) -> anyhow::Result<()> {
+    pub(crate) fn clear(&self) -> anyhow::Result<()> {
         let Ok(entries) = std::fs::read_dir(&self.dir) else {
             return Ok(());
         };
@@ -354,40 +354,40 @@ impl LabelStore {
 }
 
 /// Where labelling stands per object, so that a rerun continues from the right round.
-pub const PROGRESS_FILE: &str = "progress.json";
+pub(crate) const PROGRESS_FILE: &str = "progress.json";
 
 /// Labelling progress, kept beside labels.json.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Progress {
+pub(crate) struct Progress {
     /// `graspmap.label-progress/1`.
-    pub schema: String,
+    pub(crate) schema: String,
     /// The seed the rounds were drawn with.
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// The click source, e.g. `scripted`.
-    pub source: String,
+    pub(crate) source: String,
     /// Per object: rounds run and labels stored after them.
-    pub rounds: Vec<ObjectProgress>,
+    pub(crate) rounds: Vec<ObjectProgress>,
 }
 
 /// One object's progress.
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ObjectProgress {
+pub(crate) struct ObjectProgress {
     /// Object name.
-    pub object: String,
+    pub(crate) object: String,
     /// Rounds run, failed ones included.
-    pub rounds: u32,
+    pub(crate) rounds: u32,
     /// Labels stored when the last round was counted.
-    pub labels: u32,
+    pub(crate) labels: u32,
 }
 
 impl Progress {
     /// The schema name.
-    pub const SCHEMA: &'static str = "graspmap.label-progress/1";
+    pub(crate) const SCHEMA: &'static str = "graspmap.label-progress/1";
 
     /// Rounds run and labels recorded for `object`.
-    pub fn entry(&self, object: &str) -> (u32, u32) {
+    pub(crate) fn entry(&self, object: &str) -> (u32, u32) {
         self.rounds
             .iter()
             .find(|p| p.object == object)
@@ -395,12 +395,12 @@ impl Progress {
     }
 
     /// Rounds already run for `object`.
-    pub fn rounds_of(&self, object: &str) -> u32 {
+    pub(crate) fn rounds_of(&self, object: &str) -> u32 {
         self.entry(object).0
     }
 
     /// Records that `object` has run `rounds` rounds and has `labels` labels.
-    pub fn set_rounds(&mut self, object: &str, rounds: u32, labels: u32) {
+    pub(crate) fn set_rounds(&mut self, object: &str, rounds: u32, labels: u32) {
         match self.rounds.iter_mut().find(|p| p.object == object) {
             Some(p) => {
                 p.rounds = rounds;
@@ -417,7 +417,7 @@ impl Progress {
 
 impl LabelStore {
     /// Reads progress.json, if any.
-    pub fn load_progress(&self) -> anyhow::Result<Option<Progress>> {
+    pub(crate) fn load_progress(&self) -> anyhow::Result<Option<Progress>> {
         let path = self.dir.join(PROGRESS_FILE);
         match std::fs::read_to_string(&path) {
             Ok(text) => Ok(Some(serde_json::from_str(&text).with_context(|| {
@@ -432,7 +432,7 @@ impl LabelStore {
     }
 
     /// Writes progress.json atomically.
-    pub fn save_progress(&self, progress: &Progress) -> anyhow::Result<()> {
+    pub(crate) fn save_progress(&self, progress: &Progress) -> anyhow::Result<()> {
         let mut text = serde_json::to_vec_pretty(progress)?;
         text.write_all(b"\n")?;
         write_atomic(&self.dir.join(PROGRESS_FILE), &text)

@@ -5,7 +5,7 @@
 //! tensors. The on-disk formats are in docs/data.md, the sample construction in
 //! docs/learning.md.
 
-pub mod atomic;
+pub(crate) mod atomic;
 pub mod augment;
 pub mod dataset;
 pub mod labels;

@@ -6,7 +6,7 @@ use super::{fingers, PixelGrasp};
 
 /// Marks a grasp: the finger points (centre ± 10 px along θ) joined by a red line,
 /// green finger dots and a yellow centre pixel.
-pub fn draw_grasp(image: &mut RgbImage, g: &PixelGrasp) {
+pub(crate) fn draw_grasp(image: &mut RgbImage, g: &PixelGrasp) {
     let [a, b] = fingers(*g);
     let line = Rgb([255, 40, 40]);
     imageproc::drawing::draw_line_segment_mut(image, (a[0], a[1]), (b[0], b[1]), line);

@@ -6,27 +6,27 @@
 
 /// The hand below tool0.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct GripperGeometry {
+pub(crate) struct GripperGeometry {
     /// Largest distance between the pads' inner faces.
-    pub max_opening: f32,
+    pub(crate) max_opening: f32,
     /// Distance from tool0 to the TCP (the fingertips' lower edge) along the tool axis.
-    pub tcp_offset: f32,
+    pub(crate) tcp_offset: f32,
     /// Pad width across the closing direction.
-    pub pad_width: f32,
+    pub(crate) pad_width: f32,
     /// Pad height along the tool axis.
-    pub pad_height: f32,
+    pub(crate) pad_height: f32,
     /// Pad thickness along the closing direction.
-    pub pad_thickness: f32,
+    pub(crate) pad_thickness: f32,
     /// Palm (coupling and body) length below tool0.
-    pub palm_length: f32,
+    pub(crate) palm_length: f32,
     /// Palm half extent across the closing direction.
-    pub palm_half_across: f32,
+    pub(crate) palm_half_across: f32,
     /// Palm half extent along the closing direction.
-    pub palm_half_along: f32,
+    pub(crate) palm_half_along: f32,
 }
 
 /// The gripper of the workcell.
-pub const GRIPPER: GripperGeometry = GripperGeometry {
+pub(crate) const GRIPPER: GripperGeometry = GripperGeometry {
     max_opening: 0.085,
     tcp_offset: 0.15,
     pad_width: 0.022,
@@ -39,7 +39,7 @@ pub const GRIPPER: GripperGeometry = GripperGeometry {
 
 impl GripperGeometry {
     /// Height of the palm's lower face above the TCP.
-    pub const fn palm_height(&self) -> f32 {
+    pub(crate) const fn palm_height(&self) -> f32 {
         self.tcp_offset - self.palm_length
     }
 }

@@ -6,23 +6,23 @@
 //! turn a pixel into a world point) and nothing above it; no rapier world, no tch.
 //! Conventions: docs/conventions.md.
 
-pub mod draw;
-pub mod gripper;
-pub mod rotate;
+pub(crate) mod draw;
+pub(crate) mod gripper;
+pub(crate) mod rotate;
 pub mod tote;
 pub mod world;
 
 pub use world::{world_grasp, WorldGrasp};
 
 /// Side length of the camera image and of every label image (px).
-pub const IMAGE_SIZE: u32 = 128;
+pub(crate) const IMAGE_SIZE: u32 = 128;
 /// Number of angle bins over the half turn.
-pub const BINS: usize = 8;
+pub(crate) const BINS: usize = 8;
 /// Width of one angle bin in degrees (180 / [`BINS`]).
-pub const BIN_DEG: f32 = 22.5;
+pub(crate) const BIN_DEG: f32 = 22.5;
 /// Distance (px) from the grasp centre to each finger point along the grasp angle: how the
 /// reference marks a grasp and augments it.
-pub const FINGER_OFFSET_PX: f32 = 10.0;
+pub(crate) const FINGER_OFFSET_PX: f32 = 10.0;
 
 /// A grasp in image terms, as users click and label it.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -37,7 +37,7 @@ pub struct PixelGrasp {
 
 /// Why a pixel or an angle is not a grasp of the image.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum PixelError {
+pub(crate) enum PixelError {
     /// A coordinate outside 0..IMAGE_SIZE, or not an integer.
     #[error("{axis} = {value} must be an integer in 0..={max}")]
     OutOfImage {
@@ -60,7 +60,7 @@ impl PixelGrasp {
     /// The grasp for coordinates and an angle read from a file or a flag: coordinates must be
     /// integers inside the image, the angle any finite number of degrees (normalised here).
     /// Every reader of labels and clicks validates through this one function.
-    pub fn checked(x: f64, y: f64, angle_deg: f64) -> Result<Self, PixelError> {
+    pub(crate) fn checked(x: f64, y: f64, angle_deg: f64) -> Result<Self, PixelError> {
         let coordinate = |axis: &'static str, value: f64| {
             if value.fract() == 0.0 && (0.0..f64::from(IMAGE_SIZE)).contains(&value) {
                 Ok(value as u32)
@@ -84,7 +84,7 @@ impl PixelGrasp {
 }
 
 /// Normalises an angle in degrees into [0, 180): a parallel-jaw grasp is symmetric under a half turn.
-pub fn normalize_angle(deg: f32) -> f32 {
+pub(crate) fn normalize_angle(deg: f32) -> f32 {
     let a = deg.rem_euclid(180.0);
     if a >= 180.0 {
         0.0
@@ -95,18 +95,18 @@ pub fn normalize_angle(deg: f32) -> f32 {
 
 /// The bin of an angle in degrees: round(θ / 22.5) mod 8 on θ normalised into [0, 180), so
 /// angles within half a bin of 180° wrap to bin 0 (ours; the reference put 170° in bin 7).
-pub fn angle_bin(angle_deg: f32) -> usize {
+pub(crate) fn angle_bin(angle_deg: f32) -> usize {
     (normalize_angle(angle_deg) / BIN_DEG).round() as usize % BINS
 }
 
 /// The angle in degrees that bin `bin` stands for.
-pub fn bin_angle(bin: usize) -> f32 {
+pub(crate) fn bin_angle(bin: usize) -> f32 {
     bin as f32 * BIN_DEG
 }
 
 /// The two finger points of a grasp: its pixel centre (u + 0.5, v + 0.5) ∓ [`FINGER_OFFSET_PX`]
 /// along θ, first finger on the −θ side.
-pub fn fingers(grasp: PixelGrasp) -> [[f32; 2]; 2] {
+pub(crate) fn fingers(grasp: PixelGrasp) -> [[f32; 2]; 2] {
     let centre = [grasp.u as f32 + 0.5, grasp.v as f32 + 0.5];
     let (sin, cos) = grasp.angle_deg.to_radians().sin_cos();
     let d = [FINGER_OFFSET_PX * cos, FINGER_OFFSET_PX * sin];
@@ -118,7 +118,7 @@ pub fn fingers(grasp: PixelGrasp) -> [[f32; 2]; 2] {
 
 /// The grasp that two finger points describe: their midpoint (continuous image coordinates) and
 /// the angle of the line through them, in degrees in [0, 180). Finger order does not matter.
-pub fn grasp_from_fingers(f: [[f32; 2]; 2]) -> ([f32; 2], f32) {
+pub(crate) fn grasp_from_fingers(f: [[f32; 2]; 2]) -> ([f32; 2], f32) {
     let centre = [(f[0][0] + f[1][0]) / 2.0, (f[0][1] + f[1][1]) / 2.0];
     let angle = (f[1][1] - f[0][1]).atan2(f[1][0] - f[0][0]).to_degrees();
     (centre, normalize_angle(angle))

@@ -20,18 +20,18 @@ use super::{bin_angle, PixelGrasp, BINS};
 
 /// Rotates `image` about its centre by `angle_deg` (clockwise on screen for positive angles),
 /// bilinear, black where the source lies outside the image. Same size as the input.
-pub fn rotate_image(image: &RgbImage, angle_deg: f32) -> RgbImage {
+pub(crate) fn rotate_image(image: &RgbImage, angle_deg: f32) -> RgbImage {
     warp_affine(image, angle_deg, [0.0, 0.0])
 }
 
 /// Where [`rotate_image`] moves the continuous point `p` of a `size` × `size` image.
-pub fn rotate_point(p: [f32; 2], angle_deg: f32, size: u32) -> [f32; 2] {
+pub(crate) fn rotate_point(p: [f32; 2], angle_deg: f32, size: u32) -> [f32; 2] {
     map_point(p, angle_deg, [0.0, 0.0], [size as f32 / 2.0; 2])
 }
 
 /// The original-image grasp for pixel (`u`, `v`) of map `bin`: the pixel's centre rotated by
 /// +bin · 22.5°, the pixel holding it, clipped to the image; the angle is the bin's.
-pub fn unrotate(bin: usize, u: u32, v: u32, size: u32) -> PixelGrasp {
+pub(crate) fn unrotate(bin: usize, u: u32, v: u32, size: u32) -> PixelGrasp {
     let [x, y] = rotate_point([u as f32 + 0.5, v as f32 + 0.5], bin_angle(bin), size);
     let clip = |c: f32| (c.floor().max(0.0) as u32).min(size - 1);
     PixelGrasp {
@@ -42,7 +42,7 @@ pub fn unrotate(bin: usize, u: u32, v: u32, size: u32) -> PixelGrasp {
 }
 
 /// The rotated observations the maps belong to: image `b` is the original turned by −b · 22.5°.
-pub fn rotated_observations(image: &RgbImage) -> Vec<RgbImage> {
+pub(crate) fn rotated_observations(image: &RgbImage) -> Vec<RgbImage> {
     (0..BINS)
         .map(|b| rotate_image(image, -bin_angle(b)))
         .collect()
@@ -136,6 +136,18 @@ pub(crate) mod test_images {
             let c = (255.0 * g).round() as u8;
             image::Rgb([c, c, c])
         })
+    }
+
+    /// A grasp at a uniformly random pixel with both coordinates in `range`, any angle.
+    pub(crate) fn random_grasp(
+        rng: &mut impl rand::Rng,
+        range: std::ops::Range<u32>,
+    ) -> crate::grasp::PixelGrasp {
+        crate::grasp::PixelGrasp {
+            u: rng.random_range(range.clone()),
+            v: rng.random_range(range),
+            angle_deg: rng.random_range(0.0..180.0),
+        }
     }
 
     pub(crate) fn dist(a: [f32; 2], b: [f32; 2]) -> f32 {

@@ -6,27 +6,27 @@
 /// Top surface of a tote's floor above the ground.
 pub const FLOOR_TOP: f32 = 0.02;
 /// Height of a tote's wall tops above the ground.
-pub const WALL_TOP: f32 = 0.21;
+pub(crate) const WALL_TOP: f32 = 0.21;
 /// Thickness of a tote's walls.
-pub const WALL_THICKNESS: f32 = 0.03;
+pub(crate) const WALL_THICKNESS: f32 = 0.03;
 /// Half extents (x, y) of a tote's inner floor.
-pub const INNER_HALF: [f32; 2] = [0.30, 0.40];
+pub(crate) const INNER_HALF: [f32; 2] = [0.30, 0.40];
 
 /// The inside of a tote.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Tote {
+pub(crate) struct Tote {
     /// Centre of the floor (x, y).
-    pub center: [f32; 2],
+    pub(crate) center: [f32; 2],
     /// Half extents of the inner floor (x, y).
-    pub inner_half: [f32; 2],
+    pub(crate) inner_half: [f32; 2],
     /// Height of the wall tops.
-    pub wall_top: f32,
+    pub(crate) wall_top: f32,
     /// Height of the floor's top surface.
-    pub floor_top: f32,
+    pub(crate) floor_top: f32,
 }
 
 /// Bin 1, where objects are dropped and picked.
-pub const PICK_TOTE: Tote = Tote {
+pub(crate) const PICK_TOTE: Tote = Tote {
     center: [0.5, 0.0],
     inner_half: INNER_HALF,
     wall_top: WALL_TOP,
@@ -34,7 +34,7 @@ pub const PICK_TOTE: Tote = Tote {
 };
 
 /// Bin 2, where picked objects are placed.
-pub const PLACE_TOTE: Tote = Tote {
+pub(crate) const PLACE_TOTE: Tote = Tote {
     center: [-0.5, 0.0],
     inner_half: INNER_HALF,
     wall_top: WALL_TOP,

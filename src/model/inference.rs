@@ -12,7 +12,7 @@ use crate::model::unet::{MiniUNet, Precision};
 use crate::policy::affordance::AffordanceMaps;
 
 /// A MiniUNet with its weights, ready to predict.
-pub struct AffordanceModel {
+pub(crate) struct AffordanceModel {
     // Owns the weights the network's layers point into.
     _weights: nn::VarStore,
     net: MiniUNet,
@@ -21,7 +21,7 @@ pub struct AffordanceModel {
 
 impl AffordanceModel {
     /// Loads the weights of a `.safetensors` checkpoint (as `graspmap train` writes them).
-    pub fn load(path: &Path, precision: Precision) -> anyhow::Result<Self> {
+    pub(crate) fn load(path: &Path, precision: Precision) -> anyhow::Result<Self> {
         if !path.is_file() {
             bail!(
                 "checkpoint {} not found: run `graspmap train` first, or pass --checkpoint PATH",
@@ -47,13 +47,8 @@ impl AffordanceModel {
         })
     }
 
-    /// The arithmetic used.
-    pub fn precision(&self) -> Precision {
-        self.precision
-    }
-
     /// Affordance (sigmoid of the logits) for the [`BINS`] rotated observations, one batch.
-    pub fn predict(&self, rotated: &[RgbImage]) -> AffordanceMaps {
+    pub(crate) fn predict(&self, rotated: &[RgbImage]) -> AffordanceMaps {
         assert_eq!(rotated.len(), BINS, "one observation per bin");
         let (w, h) = rotated[0].dimensions();
         assert_eq!(w, h, "square observations");

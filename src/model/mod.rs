@@ -3,11 +3,11 @@
 //! This layer owns tch and uses the pure core (`grasp`, `data`); it never sees the simulator.
 //! docs/learning.md describes the network and its training.
 
-pub mod inference;
+pub(crate) mod inference;
 pub mod train;
 pub mod unet;
 
 /// Sets how many threads libtorch's operators use.
-pub fn use_threads(threads: u16) {
+pub(crate) fn use_threads(threads: u16) {
     tch::set_num_threads(i32::from(threads));
 }

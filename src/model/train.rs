@@ -25,17 +25,17 @@ use crate::model::unet::{MiniUNet, Precision};
 #[serde(deny_unknown_fields)]
 pub struct TrainConfig {
     /// Epochs to run (101).
-    pub epochs: u32,
+    pub(crate) epochs: u32,
     /// Images per optimiser step (8).
-    pub batch_size: usize,
+    pub(crate) batch_size: usize,
     /// Initial Adam learning rate (1e-3).
-    pub lr: f64,
+    pub(crate) lr: f64,
     /// Seed of the split, the initial weights, the data order and the augmentation.
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// Multiply the LR by this after `patience` epochs without validation improvement (0.1).
-    pub lr_factor: f64,
+    pub(crate) lr_factor: f64,
     /// Epochs without improvement before the LR drops (3).
-    pub patience: u32,
+    pub(crate) patience: u32,
     /// Arithmetic of the forward and backward passes.
     pub precision: Precision,
 }
@@ -55,9 +55,9 @@ impl Default for TrainConfig {
 }
 
 /// Adam (β 0.9/0.999, ε 1e-8, no weight decay), PyTorch's update rule.
-pub struct Adam {
+pub(crate) struct Adam {
     /// Current learning rate.
-    pub lr: f64,
+    pub(crate) lr: f64,
     step: i64,
     names: Vec<String>,
     params: Vec<Tensor>,
@@ -71,7 +71,7 @@ const EPSILON: f64 = 1e-8;
 
 impl Adam {
     /// Adam over every variable of `vs`, in name order.
-    pub fn new(vs: &nn::VarStore, lr: f64) -> Self {
+    pub(crate) fn new(vs: &nn::VarStore, lr: f64) -> Self {
         let vars: BTreeMap<String, Tensor> = vs.variables().into_iter().collect();
         let names: Vec<String> = vars.keys().cloned().collect();
         let params: Vec<Tensor> = vars.into_values().collect();
@@ -88,7 +88,7 @@ impl Adam {
     }
 
     /// One update from the gradients in the parameters; then clears them.
-    pub fn step(&mut self) {
+    pub(crate) fn step(&mut self) {
         self.step += 1;
         let bias1 = 1.0 - BETA1.powi(self.step as i32);
         let bias2 = 1.0 - BETA2.powi(self.step as i32);
@@ -116,12 +116,12 @@ impl Adam {
     }
 
     /// Optimiser steps taken.
-    pub fn steps(&self) -> i64 {
+    pub(crate) fn steps(&self) -> i64 {
         self.step
     }
 
     /// The moment tensors, named after their parameters.
-    pub fn named_state(&self) -> Vec<(String, Tensor)> {
+    pub(crate) fn named_state(&self) -> Vec<(String, Tensor)> {
         self.names
             .iter()
             .zip(&self.exp_avg)
@@ -136,7 +136,7 @@ impl Adam {
     }
 
     /// Restores moments and step count saved by [`Adam::named_state`].
-    pub fn restore(
+    pub(crate) fn restore(
         &mut self,
         tensors: &BTreeMap<String, Tensor>,
         steps: i64,
@@ -170,14 +170,14 @@ impl Adam {
 #[serde(deny_unknown_fields)]
 pub struct Plateau {
     /// Best validation loss so far (none before the first epoch).
-    pub best: Option<f64>,
+    pub(crate) best: Option<f64>,
     /// Epochs since it improved.
-    pub bad_epochs: u32,
+    pub(crate) bad_epochs: u32,
 }
 
 impl Plateau {
     /// Feeds one epoch's validation loss; returns the new learning rate.
-    pub fn update(&mut self, loss: f64, lr: f64, config: &TrainConfig) -> f64 {
+    pub(crate) fn update(&mut self, loss: f64, lr: f64, config: &TrainConfig) -> f64 {
         if self.best.is_none_or(|best| loss < best * (1.0 - 1e-4)) {
             self.best = Some(loss);
             self.bad_epochs = 0;
@@ -207,7 +207,7 @@ pub struct EpochRecord {
     /// Learning rate used in the epoch.
     pub lr: f64,
     /// Wall seconds of the epoch.
-    pub seconds: f64,
+    pub(crate) seconds: f64,
 }
 
 /// The JSON sidecar of a checkpoint.
@@ -244,7 +244,7 @@ impl CheckpointMeta {
 }
 
 /// Paths of a checkpoint pair.
-pub fn checkpoint_paths(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
+pub(crate) fn checkpoint_paths(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
     (
         dir.join(format!("{name}.safetensors")),
         dir.join(format!("{name}.json")),
@@ -330,7 +330,7 @@ pub fn load_weights(
 }
 
 /// Stacks samples into an input batch N×3×H×W and a target batch N×1×H×W.
-pub fn batch(samples: &[Sample], size: i64) -> (Tensor, Tensor) {
+pub(crate) fn batch(samples: &[Sample], size: i64) -> (Tensor, Tensor) {
     let n = samples.len() as i64;
     let inputs: Vec<f32> = samples
         .iter()
@@ -347,14 +347,19 @@ pub fn batch(samples: &[Sample], size: i64) -> (Tensor, Tensor) {
 }
 
 /// Mean BCE-with-logits of a batch (computed in float32 whatever the precision).
-pub fn loss(net: &MiniUNet, input: &Tensor, target: &Tensor, precision: Precision) -> Tensor {
+pub(crate) fn loss(
+    net: &MiniUNet,
+    input: &Tensor,
+    target: &Tensor,
+    precision: Precision,
+) -> Tensor {
     net.forward_with(input, precision)
         .binary_cross_entropy_with_logits::<Tensor>(target, None, None, Reduction::Mean)
 }
 
 /// The per-epoch RNG: a pure function of the seed and the epoch, so a resumed run draws the
 /// same data order and augmentations as an uninterrupted one.
-pub fn epoch_rng(seed: u64, epoch: u32) -> ChaCha8Rng {
+pub(crate) fn epoch_rng(seed: u64, epoch: u32) -> ChaCha8Rng {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(1000 + epoch as u64);
     rng
@@ -362,15 +367,15 @@ pub fn epoch_rng(seed: u64, epoch: u32) -> ChaCha8Rng {
 
 /// The images an epoch draws from, and which of them it uses.
 #[derive(Clone, Copy)]
-pub struct Subset<'a> {
+pub(crate) struct Subset<'a> {
     /// Every labelled image.
-    pub images: &'a [LabelledImage],
+    pub(crate) images: &'a [LabelledImage],
     /// The ones in this subset.
-    pub indices: &'a [usize],
+    pub(crate) indices: &'a [usize],
 }
 
 /// Trains one epoch; returns the mean training loss.
-pub fn train_epoch(
+pub(crate) fn train_epoch(
     net: &MiniUNet,
     adam: &mut Adam,
     data: Subset,
@@ -407,7 +412,7 @@ pub fn train_epoch(
 }
 
 /// Mean validation loss over unaugmented samples.
-pub fn validate(net: &MiniUNet, data: Subset, config: &TrainConfig) -> f64 {
+pub(crate) fn validate(net: &MiniUNet, data: Subset, config: &TrainConfig) -> f64 {
     let (images, indices, batch_size) = (data.images, data.indices, config.batch_size);
     tch::no_grad(|| {
         let mut total = 0.0;
@@ -425,7 +430,7 @@ pub fn validate(net: &MiniUNet, data: Subset, config: &TrainConfig) -> f64 {
 }
 
 /// The predicted affordance (sigmoid) for one sample, H×W in [0, 1].
-pub fn predict_map(net: &MiniUNet, sample: &Sample, precision: Precision) -> Vec<f32> {
+pub(crate) fn predict_map(net: &MiniUNet, sample: &Sample, precision: Precision) -> Vec<f32> {
     tch::no_grad(|| {
         let (input, _) = batch(
             std::slice::from_ref(sample),

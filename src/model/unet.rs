@@ -19,7 +19,8 @@ pub enum Precision {
 }
 
 /// The parameter names of the reference module, in its state_dict order.
-pub const PARAMETER_NAMES: [&str; 16] = [
+#[cfg(test)]
+pub(crate) const PARAMETER_NAMES: [&str; 16] = [
     "inc.0.weight",
     "inc.0.bias",
     "down1.1.weight",
@@ -112,7 +113,7 @@ impl MiniUNet {
 impl Precision {
     /// bf16 where the CPU computes it natively (AVX-512 BF16, which AMX CPUs also have);
     /// elsewhere libtorch would emulate it, slower than fp32.
-    pub fn fastest_supported() -> Self {
+    pub(crate) fn fastest_supported() -> Self {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx512bf16") {
             return Precision::Bf16;
@@ -121,7 +122,7 @@ impl Precision {
     }
 
     /// As the command line and the reports spell it.
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             Precision::Fp32 => "fp32",
             Precision::Bf16 => "bf16",
@@ -130,7 +131,7 @@ impl Precision {
 }
 
 /// Channels-last layout: tch has no memory-format API, so permute, copy, permute back.
-pub fn channels_last(x: &Tensor) -> Tensor {
+pub(crate) fn channels_last(x: &Tensor) -> Tensor {
     x.permute([0, 2, 3, 1]).contiguous().permute([0, 3, 1, 2])
 }
 
@@ -149,7 +150,7 @@ fn up_bf16(x: &Tensor, up: &nn::ConvTranspose2D) -> Tensor {
 
 impl MiniUNet {
     /// Logits, N×1×H×W float32, computed in `precision`.
-    pub fn forward_with(&self, xs: &Tensor, precision: Precision) -> Tensor {
+    pub(crate) fn forward_with(&self, xs: &Tensor, precision: Precision) -> Tensor {
         match precision {
             Precision::Fp32 => self.forward(xs),
             Precision::Bf16 => {

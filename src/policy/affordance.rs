@@ -15,14 +15,14 @@ use crate::grasp::{angle_bin, bin_angle, PixelGrasp, BINS};
 /// The network's scores for one observation: [`BINS`] maps of `size` × `size`, each in the frame
 /// of the observation rotated by −bin · 22.5°, values in [0, 1].
 #[derive(Debug, Clone, PartialEq)]
-pub struct AffordanceMaps {
+pub(crate) struct AffordanceMaps {
     size: u32,
     values: Vec<f32>,
 }
 
 impl AffordanceMaps {
     /// Wraps bin-major, row-major scores; `values.len()` must be `BINS · size²`.
-    pub fn new(size: u32, values: Vec<f32>) -> Self {
+    pub(crate) fn new(size: u32, values: Vec<f32>) -> Self {
         assert_eq!(
             values.len(),
             BINS * (size * size) as usize,
@@ -31,24 +31,20 @@ impl AffordanceMaps {
         Self { size, values }
     }
 
-    /// Side length of each map.
-    pub fn size(&self) -> u32 {
-        self.size
-    }
-
     /// Score at (column `u`, row `v`) of map `bin`.
-    pub fn get(&self, bin: usize, u: u32, v: u32) -> f32 {
+    pub(crate) fn get(&self, bin: usize, u: u32, v: u32) -> f32 {
         self.values[self.index(bin, u, v)]
     }
 
     /// One map, row-major.
-    pub fn map(&self, bin: usize) -> &[f32] {
+    #[cfg(test)]
+    pub(crate) fn map(&self, bin: usize) -> &[f32] {
         let plane = (self.size * self.size) as usize;
         &self.values[bin * plane..(bin + 1) * plane]
     }
 
     /// Zeroes the scores of actions that are not allowed (`allowed` in the same layout).
-    pub fn restrict(&mut self, allowed: &[bool]) {
+    pub(crate) fn restrict(&mut self, allowed: &[bool]) {
         assert_eq!(allowed.len(), self.values.len(), "one flag per score");
         for (value, &ok) in self.values.iter_mut().zip(allowed) {
             if !ok {
@@ -59,7 +55,7 @@ impl AffordanceMaps {
 
     /// The action of an original-image grasp: its angle's bin, its centre in that bin's map and
     /// the score there (0 where the rotation leaves the map).
-    pub fn choice_of(&self, grasp: PixelGrasp) -> Choice {
+    pub(crate) fn choice_of(&self, grasp: PixelGrasp) -> Choice {
         let (bin, [x, y]) = self.map_position(grasp);
         let clip = |c: f32| (c.floor().max(0.0) as u32).min(self.size - 1);
         Choice {
@@ -72,7 +68,7 @@ impl AffordanceMaps {
 
     /// The score of an original-image grasp: its angle's map at its centre carried into that
     /// map's frame; 0 where the rotation leaves the map.
-    pub fn score_at(&self, grasp: PixelGrasp) -> f32 {
+    pub(crate) fn score_at(&self, grasp: PixelGrasp) -> f32 {
         let (bin, [x, y]) = self.map_position(grasp);
         let inside = |c: f32| (0.0..self.size as f32).contains(&c);
         if inside(x) && inside(y) {
@@ -95,7 +91,7 @@ impl AffordanceMaps {
 
     /// The best (bin, row, column), first in that order on ties (like argmax over the flattened
     /// batch), turned into a grasp in the original image.
-    pub fn choose(&self) -> Choice {
+    pub(crate) fn choose(&self) -> Choice {
         let (best, score) =
             self.values
                 .iter()
@@ -113,7 +109,7 @@ impl AffordanceMaps {
 
     /// The `count` best actions with a positive score, best first, ties in the order
     /// [`AffordanceMaps::choose`] breaks them.
-    pub fn ranked(&self, count: usize) -> Vec<Choice> {
+    pub(crate) fn ranked(&self, count: usize) -> Vec<Choice> {
         let by_score =
             |a: &usize, b: &usize| self.values[*b].total_cmp(&self.values[*a]).then(a.cmp(b));
         let mut order: Vec<usize> = (0..self.values.len())
@@ -149,30 +145,30 @@ impl AffordanceMaps {
 
 /// A chosen action.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct Choice {
+pub(crate) struct Choice {
     /// Angle bin (the map it came from).
-    pub bin: usize,
+    pub(crate) bin: usize,
     /// Pixel [column, row] in the rotated map.
-    pub rotated: [u32; 2],
+    pub(crate) rotated: [u32; 2],
     /// The grasp in the original image: the map pixel rotated back (or, when `eval`'s centring
     /// moved it, the executed grasp, and `bin`, `rotated` and `score` are its own).
-    pub grasp: PixelGrasp,
+    pub(crate) grasp: PixelGrasp,
     /// Affordance at the chosen pixel (after any suppression).
-    pub score: f32,
+    pub(crate) score: f32,
 }
 
 /// How failure suppression lowers the maps around past actions.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct SuppressionConfig {
+pub(crate) struct SuppressionConfig {
     /// Actions remembered (the user's `--n_past_action`); 0 turns suppression off.
-    pub remember: usize,
+    pub(crate) remember: usize,
     /// Standard deviation of the subtracted Gaussian, in pixels.
-    pub sigma_px: f32,
+    pub(crate) sigma_px: f32,
     /// Lower the rotations within this many bins of the past action's (circularly, 22.5° each):
     /// 0 = its own rotation only, 4 = all 8.
-    pub rotation_reach: usize,
+    pub(crate) rotation_reach: usize,
     /// Whether successful actions enter the memory too.
-    pub remember_successes: bool,
+    pub(crate) remember_successes: bool,
 }
 
 impl Default for SuppressionConfig {
@@ -190,14 +186,14 @@ impl Default for SuppressionConfig {
 
 /// The last N actions and the map lowering they cause.
 #[derive(Debug, Clone)]
-pub struct Suppression {
+pub(crate) struct Suppression {
     config: SuppressionConfig,
     past: VecDeque<Choice>,
 }
 
 impl Suppression {
     /// An empty memory.
-    pub fn new(config: SuppressionConfig) -> Self {
+    pub(crate) fn new(config: SuppressionConfig) -> Self {
         Self {
             config,
             past: VecDeque::new(),
@@ -205,7 +201,7 @@ impl Suppression {
     }
 
     /// Remembers an executed action (a no-op for successes unless configured, and when off).
-    pub fn record(&mut self, choice: Choice, success: bool) {
+    pub(crate) fn record(&mut self, choice: Choice, success: bool) {
         if self.config.remember == 0 || (success && !self.config.remember_successes) {
             return;
         }
@@ -216,14 +212,15 @@ impl Suppression {
     }
 
     /// The remembered actions, oldest first.
-    pub fn past(&self) -> impl Iterator<Item = &Choice> {
+    #[cfg(test)]
+    pub(crate) fn past(&self) -> impl Iterator<Item = &Choice> {
         self.past.iter()
     }
 
     /// Subtracts a unit-peak Gaussian around each remembered action and clips to [0, 1]. The
     /// action's original-image grasp centre is carried into each rotated frame, so all bins see
     /// the same spot on the object.
-    pub fn apply(&self, maps: &mut AffordanceMaps) {
+    pub(crate) fn apply(&self, maps: &mut AffordanceMaps) {
         let size = maps.size;
         let two_var = 2.0 * self.config.sigma_px * self.config.sigma_px;
         let reach = (3.0 * self.config.sigma_px).ceil() as i64;
@@ -253,7 +250,11 @@ impl Suppression {
 /// The ref's 512 × 512 grid: for each bin, the rotated observation beside its (suppressed) map
 /// in viridis, two pairs per row, four rows; the chosen grasp is drawn, horizontal, on both
 /// panels of its bin, which also gets a white frame.
-pub fn visualisation(rotated: &[RgbImage], maps: &AffordanceMaps, choice: &Choice) -> RgbImage {
+pub(crate) fn visualisation(
+    rotated: &[RgbImage],
+    maps: &AffordanceMaps,
+    choice: &Choice,
+) -> RgbImage {
     let size = maps.size;
     let mut grid = RgbImage::new(4 * size, (BINS as u32).div_ceil(2) * size);
     for (bin, observation) in rotated.iter().enumerate().take(BINS) {

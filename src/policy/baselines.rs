@@ -16,7 +16,7 @@ use crate::vision::camera::Camera;
 use crate::vision::render::Frame;
 
 /// A uniformly random pixel of bin 1's floor and a uniformly random angle.
-pub struct RandomPolicy;
+pub(crate) struct RandomPolicy;
 
 impl Policy for RandomPolicy {
     fn decide(&self, view: &Observation, _memory: &Suppression) -> Decision {
@@ -25,7 +25,7 @@ impl Policy for RandomPolicy {
 }
 
 /// A uniformly random point of bin 1's floor, seen through the camera, and a uniform angle.
-pub fn random_grasp(camera: &Camera, seed: u64) -> PixelGrasp {
+pub(crate) fn random_grasp(camera: &Camera, seed: u64) -> PixelGrasp {
     // A separate stream from the drop, so the same seed does not correlate the two.
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     rng.set_stream(1);
@@ -51,7 +51,7 @@ pub fn random_grasp(camera: &Camera, seed: u64) -> PixelGrasp {
 }
 
 /// The planner, on the topmost object of bin 1 it can grasp, from the mask and depth.
-pub struct OraclePolicy;
+pub(crate) struct OraclePolicy;
 
 impl Policy for OraclePolicy {
     fn decide(&self, view: &Observation, _memory: &Suppression) -> Decision {

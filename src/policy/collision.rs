@@ -13,31 +13,31 @@ use crate::grasp::gripper::GripperGeometry;
 use crate::grasp::rotate::rotate_point;
 use crate::grasp::tote::Tote;
 use crate::grasp::{bin_angle, world_grasp, PixelGrasp, WorldGrasp, BINS};
-use crate::named::Named;
+use crate::named::named_enum;
 use crate::vision::camera::Camera;
 use crate::vision::render::Frame;
 
 /// The gripper's volume below tool0, as boxes around the TCP.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct GripperVolume {
+pub(crate) struct GripperVolume {
     /// Distance between the open pads' inner faces (m).
-    pub opening: f32,
+    pub(crate) opening: f32,
     /// Finger thickness along the closing line (m).
-    pub finger_thickness: f32,
+    pub(crate) finger_thickness: f32,
     /// Finger width across the closing line (m).
-    pub finger_width: f32,
+    pub(crate) finger_width: f32,
     /// Height of the palm's lower face above the TCP (m).
-    pub palm_height: f32,
+    pub(crate) palm_height: f32,
     /// Palm half extent along the closing line (m).
-    pub palm_half_along: f32,
+    pub(crate) palm_half_along: f32,
     /// Palm half extent across the closing line (m).
-    pub palm_half_across: f32,
+    pub(crate) palm_half_across: f32,
     /// Clearance kept from the walls (m).
-    pub margin: f32,
+    pub(crate) margin: f32,
 }
 
 /// Clearance the collision check keeps from the tote's walls (m).
-pub const WALL_MARGIN: f32 = 0.005;
+pub(crate) const WALL_MARGIN: f32 = 0.005;
 
 impl From<&GripperGeometry> for GripperVolume {
     fn from(g: &GripperGeometry) -> Self {
@@ -55,7 +55,7 @@ impl From<&GripperGeometry> for GripperVolume {
 
 /// True when the open gripper, lowered to this grasp, stays clear of the tote's walls: every
 /// box of it either lies inside the inner floor area or starts above the wall tops.
-pub fn clears_walls(grasp: &WorldGrasp, tote: &Tote, gripper: &GripperVolume) -> bool {
+pub(crate) fn clears_walls(grasp: &WorldGrasp, tote: &Tote, gripper: &GripperVolume) -> bool {
     let along = Vector::new(grasp.closing.x, grasp.closing.y, 0.0).normalize_or_zero();
     let across = Vector::new(-along.y, along.x, 0.0);
     let finger_offset = gripper.opening / 2.0 + gripper.finger_thickness / 2.0;
@@ -97,62 +97,36 @@ pub fn clears_walls(grasp: &WorldGrasp, tote: &Tote, gripper: &GripperVolume) ->
         })
 }
 
-/// How strictly candidate grasps are checked before the argmax.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum CollisionCheck {
-    /// Walls; the fingers and palm against the surfaces in the depth image; and the grasp
-    /// centre on something, not on bare floor.
-    Full,
-    /// Only the tote's walls.
-    Walls,
-    /// None: the reference's plain argmax.
-    Off,
-}
-
-impl Named for CollisionCheck {
-    const ALL: &'static [Self] = &[Self::Full, Self::Walls, Self::Off];
-
-    fn name(self) -> &'static str {
-        match self {
-            Self::Full => "full",
-            Self::Walls => "walls",
-            Self::Off => "off",
-        }
-    }
-
-    fn help(self) -> &'static str {
-        match self {
-            Self::Full => "walls, the surfaces in the depth image, and no grasp on bare floor",
-            Self::Walls => "only the tote's walls",
-            Self::Off => "none: the reference's plain argmax",
-        }
-    }
-}
-
-impl std::fmt::Display for CollisionCheck {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
+named_enum! {
+    /// How strictly candidate grasps are checked before the argmax.
+    pub enum CollisionCheck {
+        /// Walls; the fingers and palm against the surfaces in the depth image; and the grasp
+        /// centre on something, not on bare floor.
+        Full = "full", "walls, the surfaces in the depth image, and no grasp on bare floor",
+        /// Only the tote's walls.
+        Walls = "walls", "only the tote's walls",
+        /// None: the reference's plain argmax.
+        Off = "off", "none: the reference's plain argmax",
     }
 }
 
 /// How far above the TCP a seen surface under a finger may be (m): the depth image's noise-free
 /// but 8 mm pixels blur edges by about this much.
-pub const LANDING_TOLERANCE: f32 = 0.005;
+pub(crate) const LANDING_TOLERANCE: f32 = 0.005;
 
 /// A grasp centre whose surface is lower than this above the tote floor is on bare floor, where
 /// the pads can only close on the edge of whatever lies beside it (m).
-pub const ON_OBJECT_HEIGHT: f32 = 0.005;
+pub(crate) const ON_OBJECT_HEIGHT: f32 = 0.005;
 
 /// World height of the surface seen at each pixel.
-pub struct HeightMap {
+pub(crate) struct HeightMap {
     size: u32,
     heights: Vec<f32>,
 }
 
 impl HeightMap {
     /// Back-projects the frame's depth.
-    pub fn new(camera: &Camera, frame: &Frame) -> Self {
+    pub(crate) fn new(camera: &Camera, frame: &Frame) -> Self {
         let mut heights = Vec::with_capacity((frame.width * frame.height) as usize);
         for v in 0..frame.height {
             for u in 0..frame.width {
@@ -166,7 +140,7 @@ impl HeightMap {
     }
 
     /// The surface height seen at pixel (`u`, `v`).
-    pub fn at(&self, u: u32, v: u32) -> f32 {
+    pub(crate) fn at(&self, u: u32, v: u32) -> f32 {
         self.heights[(v * self.size + u) as usize]
     }
 
@@ -181,7 +155,7 @@ impl HeightMap {
 /// True when, lowered to the grasp, neither finger nor the palm would come down on a surface
 /// the camera sees: under each finger's footprint nothing rises above the TCP (plus
 /// [`LANDING_TOLERANCE`]), under the palm nothing above its lower face.
-pub fn lands_clear(
+pub(crate) fn lands_clear(
     grasp: &WorldGrasp,
     heights: &HeightMap,
     camera: &Camera,
@@ -225,7 +199,7 @@ pub fn lands_clear(
 /// pixel lies in the image (not in the black fill of the rotation) and it passes `check`
 /// (for `Full`: the walls, [`lands_clear`], and a centre above [`ON_OBJECT_HEIGHT`]).
 /// Same layout as [`crate::policy::affordance::AffordanceMaps`].
-pub fn allowed_actions(
+pub(crate) fn allowed_actions(
     camera: &Camera,
     frame: &Frame,
     tote: &Tote,
@@ -281,7 +255,7 @@ fn grasp_allowed(
 /// The longest surface, measured across the closing line, on which a grasp is centred (m):
 /// a box's long side (the YCB boxes and cans are at most 104 mm) and a pixel of blur at each end. A longer one is a long part (a handle, a bottle), where the
 /// network's spot along it is kept.
-pub const CENTRING_SPAN: f32 = 0.13;
+pub(crate) const CENTRING_SPAN: f32 = 0.13;
 
 /// Step of the walk along the surface when centring (m): a quarter of a pixel on the floor.
 const CENTRING_STEP: f32 = 0.002;
@@ -289,22 +263,22 @@ const CENTRING_STEP: f32 = 0.002;
 /// What the depth-based grasp checks look at: the camera, its frame and the heights it shows,
 /// the pick tote and the open gripper.
 #[derive(Clone, Copy)]
-pub struct GraspSite<'a> {
+pub(crate) struct GraspSite<'a> {
     /// The top-down camera.
-    pub camera: &'a Camera,
+    pub(crate) camera: &'a Camera,
     /// Its frame.
-    pub frame: &'a Frame,
+    pub(crate) frame: &'a Frame,
     /// The frame's heights ([`HeightMap::new`]).
-    pub heights: &'a HeightMap,
+    pub(crate) heights: &'a HeightMap,
     /// The pick tote.
-    pub tote: &'a Tote,
+    pub(crate) tote: &'a Tote,
     /// The open gripper's volume.
-    pub gripper: &'a GripperVolume,
+    pub(crate) gripper: &'a GripperVolume,
 }
 
 impl GraspSite<'_> {
     /// Whether the grasp passes the `Full` collision check.
-    pub fn allows(&self, grasp: PixelGrasp) -> bool {
+    pub(crate) fn allows(&self, grasp: PixelGrasp) -> bool {
         grasp_allowed(
             self.camera,
             self.frame,
@@ -331,7 +305,7 @@ impl GraspSite<'_> {
     ///    diagonal or long side): of the 8 angles at that middle, each centred again, the allowed
     ///    one the network scores highest is taken.
     /// 3. If none is allowed, the grasp only fits at a corner or an end: `None`.
-    pub fn refine(
+    pub(crate) fn refine(
         &self,
         grasp: PixelGrasp,
         score: impl Fn(PixelGrasp) -> f32,
@@ -361,7 +335,7 @@ impl GraspSite<'_> {
     /// The grasp, at its angle, moved to the middle of the surface above its TCP along and across
     /// the closing line, where each run fits (see [`GraspSite::refine`]); `None` when nothing rises above
     /// the TCP at its centre or the middle falls outside the image.
-    pub fn centred(&self, grasp: PixelGrasp) -> Option<PixelGrasp> {
+    pub(crate) fn centred(&self, grasp: PixelGrasp) -> Option<PixelGrasp> {
         let Self {
             camera,
             frame,

@@ -5,10 +5,10 @@
 //! object mask) and answers with a pixel grasp. It may use the pure core and `model`, never the
 //! simulator: commands wire the two together. docs/evaluation.md describes each check.
 
-pub mod affordance;
-pub mod baselines;
-pub mod collision;
-pub mod model;
+pub(crate) mod affordance;
+pub(crate) mod baselines;
+pub(crate) mod collision;
+pub(crate) mod model;
 pub mod oracle;
 
 use image::RgbImage;
@@ -20,34 +20,34 @@ use affordance::{Choice, Suppression};
 use oracle::OracleError;
 
 /// What a policy sees before one attempt.
-pub struct Observation<'a> {
+pub(crate) struct Observation<'a> {
     /// The camera the frame was taken with.
-    pub camera: &'a Camera,
+    pub(crate) camera: &'a Camera,
     /// RGB, depth and mask of the top-down view.
-    pub frame: &'a Frame,
+    pub(crate) frame: &'a Frame,
     /// The frame's RGB as an image.
-    pub rgb: &'a RgbImage,
+    pub(crate) rgb: &'a RgbImage,
     /// Mask ids of the objects still in bin 1 (ground truth: only the oracle reads it).
-    pub in_bin: &'a [u16],
+    pub(crate) in_bin: &'a [u16],
     /// Seed of this attempt's own random stream, independent of the drop.
-    pub attempt_seed: u64,
+    pub(crate) attempt_seed: u64,
 }
 
 /// A policy's answer for one observation.
-pub struct Decision {
+pub(crate) struct Decision {
     /// The grasp to execute, or why there is none.
-    pub grasp: Result<PixelGrasp, OracleError>,
+    pub(crate) grasp: Result<PixelGrasp, OracleError>,
     /// The network's action behind the grasp (model policy).
-    pub choice: Option<Choice>,
+    pub(crate) choice: Option<Choice>,
     /// The maps the choice came from, drawn as the reference's grid (model policy).
-    pub vis: Option<RgbImage>,
+    pub(crate) vis: Option<RgbImage>,
     /// Wall seconds spent on rotations, network, checks and argmax (model policy).
-    pub network_seconds: f64,
+    pub(crate) network_seconds: f64,
 }
 
 impl Decision {
     /// A decision that only names a grasp (or why there is none).
-    pub fn grasp_only(grasp: Result<PixelGrasp, OracleError>) -> Self {
+    pub(crate) fn grasp_only(grasp: Result<PixelGrasp, OracleError>) -> Self {
         Self {
             grasp,
             choice: None,
@@ -58,7 +58,7 @@ impl Decision {
 }
 
 /// Who chooses grasps.
-pub trait Policy {
+pub(crate) trait Policy {
     /// Chooses the grasp for one observation; `memory` holds the scene's past actions.
     fn decide(&self, view: &Observation, memory: &Suppression) -> Decision;
 }

@@ -14,14 +14,14 @@ use crate::model::inference::AffordanceModel;
 
 /// How the model policy checks the network's candidates (docs/evaluation.md).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct ModelPolicyConfig {
+pub(crate) struct ModelPolicyConfig {
     /// Which grasps are zeroed before the argmax. Default `Full`.
-    pub check: CollisionCheck,
+    pub(crate) check: CollisionCheck,
     /// How many of the best actions the depth test may look at; 0 executes the argmax as it
     /// is. Default 200.
-    pub verify_top: usize,
+    pub(crate) verify_top: usize,
     /// Move the chosen grasp to the middle of its surface (needs `check` `Full`). Default off.
-    pub centring: bool,
+    pub(crate) centring: bool,
 }
 
 impl Default for ModelPolicyConfig {
@@ -36,7 +36,7 @@ impl Default for ModelPolicyConfig {
 
 /// Why a model policy configuration cannot run.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum ConfigError {
+pub(crate) enum ConfigError {
     /// Centring reads the depth image through the full collision check.
     #[error("--centring needs --collision-check full (it is {check})")]
     CentringNeedsFullCheck {
@@ -47,7 +47,7 @@ pub enum ConfigError {
 
 impl ModelPolicyConfig {
     /// Checks that the options work together.
-    pub fn validate(&self) -> Result<(), ConfigError> {
+    pub(crate) fn validate(&self) -> Result<(), ConfigError> {
         if self.centring && self.check != CollisionCheck::Full {
             return Err(ConfigError::CentringNeedsFullCheck { check: self.check });
         }
@@ -56,14 +56,17 @@ impl ModelPolicyConfig {
 }
 
 /// The network and the checks between its maps and the executed grasp.
-pub struct ModelPolicy {
+pub(crate) struct ModelPolicy {
     model: AffordanceModel,
     config: ModelPolicyConfig,
 }
 
 impl ModelPolicy {
     /// A policy over a loaded model; fails when the options do not work together.
-    pub fn new(model: AffordanceModel, config: ModelPolicyConfig) -> Result<Self, ConfigError> {
+    pub(crate) fn new(
+        model: AffordanceModel,
+        config: ModelPolicyConfig,
+    ) -> Result<Self, ConfigError> {
         config.validate()?;
         Ok(Self { model, config })
     }

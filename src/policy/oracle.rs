@@ -15,38 +15,38 @@ use crate::vision::render::Frame;
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct OracleConfig {
     /// Distance between the open pads' inner faces (m).
-    pub opening: f32,
+    pub(crate) opening: f32,
     /// Pad width across the closing line (m).
-    pub pad_width: f32,
+    pub(crate) pad_width: f32,
     /// Pad thickness along the closing line (m).
-    pub pad_thickness: f32,
+    pub(crate) pad_thickness: f32,
     /// Pad height along the tool axis (m).
-    pub pad_height: f32,
+    pub(crate) pad_height: f32,
     /// Height of the palm's lower face above the TCP (m).
-    pub palm_height: f32,
+    pub(crate) palm_height: f32,
     /// Palm half extents along and across the closing line (m).
-    pub palm_half_along: f32,
+    pub(crate) palm_half_along: f32,
     /// Palm half extent across the closing line (m).
-    pub palm_half_across: f32,
+    pub(crate) palm_half_across: f32,
     /// Safety margin around the pads and inside the opening (m).
-    pub margin: f32,
+    pub(crate) margin: f32,
     /// Largest shift of the squeezed outline across a pad's width (m); more is a slanted face.
-    pub max_slant: f32,
+    pub(crate) max_slant: f32,
     /// Number of angles tried over 180°.
-    pub angles: u32,
+    pub(crate) angles: u32,
     /// Sampling step along and across the closing line (m).
-    pub step: f32,
+    pub(crate) step: f32,
 }
 
 /// Clearance the planner keeps around the pads and inside the opening (m).
-pub const PLANNING_MARGIN: f32 = 0.006;
+pub(crate) const PLANNING_MARGIN: f32 = 0.006;
 /// Largest shift of the squeezed outline across a pad before a face counts as slanted (m).
-pub const MAX_SLANT: f32 = 0.010;
+pub(crate) const MAX_SLANT: f32 = 0.010;
 /// Free space under the pads beyond this no longer raises a plan's score (m).
-pub const CLEARANCE_THAT_COUNTS: f32 = 0.02;
+pub(crate) const CLEARANCE_THAT_COUNTS: f32 = 0.02;
 /// Weight of an off-centre squeeze in a plan's score, against clearance and the distance to
 /// the object's centroid (weight 1): a squeeze off the middle pushes the object sideways.
-pub const ASYMMETRY_WEIGHT: f32 = 2.0;
+pub(crate) const ASYMMETRY_WEIGHT: f32 = 2.0;
 /// Clearance reported for pads with nothing at all beneath them (m).
 const CLEARANCE_CAP: f32 = 0.05;
 /// How far above the TCP a surface between the pads must rise to be squeezed (m).
@@ -54,9 +54,9 @@ const SQUEEZE_LEVEL: f32 = 0.003;
 /// How much nearer the camera a surface must be to hide a point behind it (m).
 const OCCLUSION_TOLERANCE: f32 = 0.002;
 /// Angles the planner tries over the half turn.
-pub const PLANNED_ANGLES: u32 = 16;
+pub(crate) const PLANNED_ANGLES: u32 = 16;
 /// Sampling step of the planner's point-cloud queries (m).
-pub const SAMPLING_STEP: f32 = 0.002;
+pub(crate) const SAMPLING_STEP: f32 = 0.002;
 
 impl Default for OracleConfig {
     fn default() -> Self {
@@ -82,16 +82,16 @@ pub struct OraclePlan {
     /// The grasp to click.
     pub grasp: PixelGrasp,
     /// Smallest height of free space under the pads' footprints (m), capped at 5 cm.
-    pub clearance: f32,
+    pub(crate) clearance: f32,
     /// Distance from the grasp centre to the object's visible centroid (m).
-    pub off_center: f32,
+    pub(crate) off_center: f32,
     /// How far the squeezed span's middle is from the grasp centre (m): the pads would
     /// push the object sideways by this much.
-    pub asymmetry: f32,
+    pub(crate) asymmetry: f32,
     /// Object width along the closing line at pad height (m).
     pub width: f32,
     /// How much the squeezed outline shifts across a pad's width (m): 0 for faces square to the jaw.
-    pub slant: f32,
+    pub(crate) slant: f32,
 }
 
 /// Why no grasp was found.

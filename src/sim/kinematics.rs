@@ -10,16 +10,16 @@ use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
 /// A UR5 joint configuration in radians, shoulder pan (index 0) to wrist 3 (index 5).
-pub type Joints = [f64; 6];
+pub(crate) type Joints = [f64; 6];
 
 /// Home configuration, with the arm over the pick bin (+x side of the world).
-pub const HOME_JOINTS: Joints = [-PI, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
+pub(crate) const HOME_JOINTS: Joints = [-PI, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
 
 /// Place configuration, with the arm over the place bin (−x side of the world).
-pub const PLACE_JOINTS: Joints = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
+pub(crate) const PLACE_JOINTS: Joints = [0.0, -FRAC_PI_2, FRAC_PI_2, -FRAC_PI_2, -FRAC_PI_2, 0.0];
 
 /// Symmetric joint limit in radians: every joint must stay within `[-JOINT_LIMIT, JOINT_LIMIT]`.
-pub const JOINT_LIMIT: f64 = TAU;
+pub(crate) const JOINT_LIMIT: f64 = TAU;
 
 /// DH twist angles `alpha_i` of the UR5.
 const DH_ALPHA: [f64; 6] = [FRAC_PI_2, 0.0, 0.0, FRAC_PI_2, -FRAC_PI_2, 0.0];
@@ -37,11 +37,12 @@ const ACOS_TOLERANCE: f64 = 1e-9;
 const WRIST_SINGULARITY: f64 = 1e-10;
 
 /// Solutions closer than this (max-abs, rad) are reported once by `inverse_all`.
+#[cfg(test)]
 const DUPLICATE_TOLERANCE: f64 = 1e-9;
 
 /// Inverse-kinematics failure.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum IkError {
+pub(crate) enum IkError {
     /// No closed-form solution reproduces the pose; `x`, `y`, `z` is the requested tool0 world position.
     #[error("pose at ({x:.3}, {y:.3}, {z:.3}) m is out of the ur5's reach")]
     Unreachable {
@@ -68,21 +69,21 @@ pub enum IkError {
 
 /// UR5 geometry (standard DH lengths, metres) and where its base frame (DH frame 0) sits in the world.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Ur5 {
+pub(crate) struct Ur5 {
     /// World pose of the robot base frame (DH frame 0).
-    pub base: Isometry3<f64>,
+    pub(crate) base: Isometry3<f64>,
     /// DH `d1`: shoulder height above the base frame.
-    pub d1: f64,
+    pub(crate) d1: f64,
     /// DH `a2`: upper-arm length (negative in the UR convention).
-    pub a2: f64,
+    pub(crate) a2: f64,
     /// DH `a3`: forearm length (negative in the UR convention).
-    pub a3: f64,
+    pub(crate) a3: f64,
     /// DH `d4`: shoulder-to-wrist lateral offset.
-    pub d4: f64,
+    pub(crate) d4: f64,
     /// DH `d5`: wrist 1 to wrist 2 offset.
-    pub d5: f64,
+    pub(crate) d5: f64,
     /// DH `d6`: wrist 3 to tool0 flange offset.
-    pub d6: f64,
+    pub(crate) d6: f64,
 }
 
 impl Default for Ur5 {
@@ -94,7 +95,7 @@ impl Default for Ur5 {
 
 impl Ur5 {
     /// Standard UR5 with its base frame at `base` in the world.
-    pub fn new(base: Isometry3<f64>) -> Self {
+    pub(crate) fn new(base: Isometry3<f64>) -> Self {
         Self {
             base,
             d1: 0.089159,
@@ -107,14 +108,15 @@ impl Ur5 {
     }
 
     /// World pose of tool0.
-    pub fn forward(&self, q: &Joints) -> Isometry3<f64> {
+    pub(crate) fn forward(&self, q: &Joints) -> Isometry3<f64> {
         (0..6).fold(self.base, |pose, i| pose * self.link(i, q[i]))
     }
 
     /// World poses of DH frames 1..=6 (frame i is the frame after joint i; frame 6 == tool0). Used to place link bodies.
     ///
     /// Element `k` of the array is DH frame `k + 1`, so `frames(q)[5] == forward(q)`.
-    pub fn frames(&self, q: &Joints) -> [Isometry3<f64>; 6] {
+    #[cfg(test)]
+    pub(crate) fn frames(&self, q: &Joints) -> [Isometry3<f64>; 6] {
         let mut out = [Isometry3::identity(); 6];
         let mut pose = self.base;
         for (i, frame) in out.iter_mut().enumerate() {
@@ -131,7 +133,8 @@ impl Ur5 {
     /// to rounding right at a reach boundary) are dropped, and coincident branches (at a singularity)
     /// are reported once. At a wrist singularity (`sin q5 ≈ 0`) q6 is free and is set to 0.
     /// An empty vector means the pose is unreachable.
-    pub fn inverse_all(&self, target: &Isometry3<f64>) -> Vec<Joints> {
+    #[cfg(test)]
+    pub(crate) fn inverse_all(&self, target: &Isometry3<f64>) -> Vec<Joints> {
         let mut out: Vec<Joints> = Vec::with_capacity(8);
         for q in self.candidates(target, 0.0) {
             let duplicate = out
@@ -157,7 +160,11 @@ impl Ur5 {
     /// [`IkError::Unreachable`] when no branch reproduces `target`; [`IkError::OutOfLimit`] if the
     /// selected solution has a joint outside ±[`JOINT_LIMIT`] (cannot happen for finite inputs,
     /// since every branch is wrapped into the limits, but is checked nonetheless).
-    pub fn inverse(&self, target: &Isometry3<f64>, near: &Joints) -> Result<Joints, IkError> {
+    pub(crate) fn inverse(
+        &self,
+        target: &Isometry3<f64>,
+        near: &Joints,
+    ) -> Result<Joints, IkError> {
         let mut best: Option<(f64, Joints)> = None;
         for raw in self.candidates(target, near[5]) {
             let mut q = raw;
@@ -335,7 +342,7 @@ fn max_abs_distance(a: &Joints, b: &Joints) -> f64 {
 /// velocity `sqrt(max_acceleration · |length|)`). A zero length gives a zero-duration profile. A
 /// negative `length` runs from 0 down to `length` with the same timing as `|length|`.
 #[derive(Debug, Clone, Copy)]
-pub struct TrapezoidProfile {
+pub(crate) struct TrapezoidProfile {
     /// Signed target distance.
     length: f64,
     /// `|length|`.
@@ -353,7 +360,7 @@ impl TrapezoidProfile {
     ///
     /// # Panics
     /// If `length` is not finite, or `max_velocity` / `max_acceleration` are not finite and positive.
-    pub fn new(length: f64, max_velocity: f64, max_acceleration: f64) -> Self {
+    pub(crate) fn new(length: f64, max_velocity: f64, max_acceleration: f64) -> Self {
         assert!(
             length.is_finite(),
             "profile length must be finite, got {length}"
@@ -387,13 +394,13 @@ impl TrapezoidProfile {
     }
 
     /// Total time in seconds (0 for a zero length).
-    pub fn duration(&self) -> f64 {
+    pub(crate) fn duration(&self) -> f64 {
         self.duration
     }
 
     /// Distance covered at time `t` (clamped into `[0, duration]`): exactly 0 at the start and
     /// exactly `length` at the end, monotone in between.
-    pub fn position(&self, t: f64) -> f64 {
+    pub(crate) fn position(&self, t: f64) -> f64 {
         if t.is_nan() || t <= 0.0 {
             return 0.0;
         }
@@ -426,7 +433,7 @@ impl TrapezoidProfile {
 /// limits the move) reaches at most `max_velocity` / `max_acceleration`, and every other joint
 /// moves proportionally slower.
 #[derive(Debug, Clone)]
-pub struct JointTrajectory {
+pub(crate) struct JointTrajectory {
     from: Joints,
     to: Joints,
     /// Largest absolute joint displacement (rad).
@@ -439,7 +446,7 @@ impl JointTrajectory {
     ///
     /// # Panics
     /// If a joint value is not finite, or `max_velocity` / `max_acceleration` are not finite and positive.
-    pub fn new(from: Joints, to: Joints, max_velocity: f64, max_acceleration: f64) -> Self {
+    pub(crate) fn new(from: Joints, to: Joints, max_velocity: f64, max_acceleration: f64) -> Self {
         let span = max_abs_distance(&from, &to);
         let span = if from.iter().chain(&to).all(|v| v.is_finite()) {
             span
@@ -455,13 +462,13 @@ impl JointTrajectory {
     }
 
     /// Duration in seconds; 0 when `from == to`.
-    pub fn duration(&self) -> f64 {
+    pub(crate) fn duration(&self) -> f64 {
         self.profile.duration()
     }
 
     /// Joint configuration at time `t`, clamped into `[0, duration]`; `sample(0) == from` and
     /// `sample(duration) == to` exactly.
-    pub fn sample(&self, t: f64) -> Joints {
+    pub(crate) fn sample(&self, t: f64) -> Joints {
         if t.is_nan() || t <= 0.0 {
             return self.from;
         }

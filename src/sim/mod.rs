@@ -3,9 +3,10 @@
 //! Everything here uses rapier's own math types (glam, f32); the closed-form IK in
 //! `kinematics` works in nalgebra f64 and is converted at its call sites in `pick`.
 
-pub mod kinematics;
+pub(crate) mod kinematics;
 pub mod pick;
-pub mod robot;
+pub(crate) mod robot;
+mod shapes;
 
 use anyhow::Context;
 use rand::{Rng, SeedableRng};
@@ -14,17 +15,17 @@ use rapier3d::math::{Pose, Rotation, Vector};
 use rapier3d::prelude::*;
 
 use crate::assets::objects::ObjectModel;
-use crate::assets::urdf::CollisionShape;
 use crate::grasp::tote::{self, Tote, PICK_TOTE, PLACE_TOTE};
 use crate::vision::camera::Camera;
 use crate::vision::render::{Drawable, Shape};
 use robot::{groups, Arm, Gripper};
+use shapes::shared_shape;
 
 /// Physics rate (Hz). 240 Hz kept thin fingers from tunnelling through small objects.
-pub const PHYSICS_HZ: f32 = 240.0;
+pub(crate) const PHYSICS_HZ: f32 = 240.0;
 
 /// Robot base position on top of the pedestal.
-pub const ROBOT_BASE: Vector = Vector::new(0.0, 0.0, 0.4);
+pub(crate) const ROBOT_BASE: Vector = Vector::new(0.0, 0.0, 0.4);
 const PEDESTAL_RADIUS: f32 = 0.0734;
 /// How far below a tote's floor top an object's centre may be and still count as inside (m).
 const LOCATE_BELOW_FLOOR: f32 = 0.01;
@@ -32,10 +33,10 @@ const LOCATE_BELOW_FLOOR: f32 = 0.01;
 const LOCATE_ABOVE_WALLS: f32 = 0.3;
 
 /// Friction of the totes, ground and pads; combined by multiplication, so contacts take the object's μ.
-pub const ENVIRONMENT_FRICTION: f32 = 1.0;
+pub(crate) const ENVIRONMENT_FRICTION: f32 = 1.0;
 
 /// Angular damping of objects (1/s).
-pub const OBJECT_ANGULAR_DAMPING: f32 = 1.0;
+pub(crate) const OBJECT_ANGULAR_DAMPING: f32 = 1.0;
 /// Consecutive still steps (0.25 s) that count as settled.
 const SETTLED_STEPS: u32 = 60;
 /// An object moving slower than this (m/s) and turning slower than [`STILL_ANGULAR_SPEED`]
@@ -56,9 +57,9 @@ const DROP_HEIGHT: [f32; 2] = [0.2, 0.7];
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct WorkcellConfig {
     /// Grip force per finger (N). Default 40.
-    pub grip_force: f32,
+    pub(crate) grip_force: f32,
     /// Pad friction, multiplied with the object's. Default 1.0.
-    pub pad_friction: f32,
+    pub(crate) pad_friction: f32,
 }
 
 impl Default for WorkcellConfig {
@@ -71,15 +72,15 @@ impl Default for WorkcellConfig {
 }
 
 /// An object in the scene.
-pub struct SceneObject {
+pub(crate) struct SceneObject {
     /// The model it was built from.
-    pub model: ObjectModel,
+    pub(crate) model: ObjectModel,
     /// Its rigid body.
-    pub body: RigidBodyHandle,
+    pub(crate) body: RigidBodyHandle,
     /// Its compound collider.
-    pub collider: ColliderHandle,
+    pub(crate) collider: ColliderHandle,
     /// Mask id in rendered frames (index + 1).
-    pub id: u16,
+    pub(crate) id: u16,
 }
 
 /// Where an object ended up: resting inside a tote's inner volume, or lost.
@@ -146,7 +147,7 @@ impl Workcell {
     }
 
     /// The top-down camera that every observation of the bin is taken with.
-    pub fn camera(&self) -> &Camera {
+    pub(crate) fn camera(&self) -> &Camera {
         &self.camera
     }
 
@@ -156,7 +157,7 @@ impl Workcell {
     }
 
     /// The objects in the scene.
-    pub fn objects(&self) -> &[SceneObject] {
+    pub(crate) fn objects(&self) -> &[SceneObject] {
         &self.objects
     }
 
@@ -165,18 +166,13 @@ impl Workcell {
         *self.world.bodies[self.objects[index].body].position()
     }
 
-    /// Current arm joints.
-    pub fn joints(&self) -> crate::sim::kinematics::Joints {
-        self.arm.joints
-    }
-
     /// World pose of tool0 for the current joints (URDF chain).
-    pub fn tool0_pose(&self) -> Pose {
+    pub(crate) fn tool0_pose(&self) -> Pose {
         self.arm.tool0_pose(&self.arm.joints)
     }
 
     /// Starts recording frames of the oblique view of the whole workcell every `every` steps.
-    pub fn start_recording(&mut self, every: u64) {
+    pub(crate) fn start_recording(&mut self, every: u64) {
         let camera = oblique_camera();
         let (scenes, received) = std::sync::mpsc::channel::<Vec<Drawable>>();
         let renderer = std::thread::spawn(move || {
@@ -193,7 +189,7 @@ impl Workcell {
     }
 
     /// Stops recording and returns the frames.
-    pub fn take_recording(&mut self) -> Vec<image::RgbImage> {
+    pub(crate) fn take_recording(&mut self) -> Vec<image::RgbImage> {
         self.recorder
             .take()
             .map(|r| {
@@ -435,9 +431,6 @@ pub(crate) fn in_contact(
     })
 }
 
-/// Facets around a round collision shape. Rapier has no rolling resistance, so exactly round
-/// cans and balls rolled on for seconds; faceted hulls (like the convex decompositions of real
-
 /// The oblique view of the whole workcell that recordings show.
 pub fn oblique_camera() -> Camera {
     Camera::look_at(
@@ -549,61 +542,6 @@ fn build_scenery(world: &mut PhysicsWorld) -> (Vec<Drawable>, Vec<ColliderHandle
         id: 0,
     });
     (scenery, environment)
-}
-
-/// object meshes) come to rest.
-const ROUND_FACETS: usize = 24;
-
-fn shared_shape(shape: &CollisionShape) -> anyhow::Result<SharedShape> {
-    let hull = |points: Vec<Vector>| {
-        SharedShape::convex_hull(&points)
-            .context("a collision mesh piece is degenerate (flat or fewer than 4 points)")
-    };
-    match shape {
-        CollisionShape::Cuboid { half_extents: h } => Ok(SharedShape::cuboid(h.x, h.y, h.z)),
-        CollisionShape::Sphere { radius } => hull(sphere_points(*radius, 0.0)),
-        CollisionShape::Cylinder {
-            radius,
-            half_height,
-        } => hull(
-            [-*half_height, *half_height]
-                .iter()
-                .flat_map(|&y| ring(*radius, y))
-                .collect(),
-        ),
-        CollisionShape::Capsule {
-            radius,
-            half_height,
-        } => hull(sphere_points(*radius, *half_height)),
-        CollisionShape::ConvexHull { points } => hull(points.clone()),
-    }
-}
-
-/// Points on a circle of radius `r` in the plane y = `y`.
-fn ring(r: f32, y: f32) -> impl Iterator<Item = Vector> {
-    (0..ROUND_FACETS).map(move |i| {
-        let a = i as f32 * std::f32::consts::TAU / ROUND_FACETS as f32;
-        Vector::new(r * a.cos(), y, r * a.sin())
-    })
-}
-
-/// Points on a sphere of radius `r`, split at the equator and pulled apart by ±`half` along y
-/// (a capsule; a sphere when `half` is 0).
-fn sphere_points(r: f32, half: f32) -> Vec<Vector> {
-    let bands = ROUND_FACETS / 4;
-    let mut points = vec![
-        Vector::new(0.0, r + half, 0.0),
-        Vector::new(0.0, -r - half, 0.0),
-    ];
-    for b in 1..bands {
-        let polar = b as f32 * std::f32::consts::FRAC_PI_2 / bands as f32;
-        let (ring_r, ring_y) = (r * polar.sin(), r * polar.cos());
-        points.extend(ring(ring_r, half + ring_y));
-        points.extend(ring(ring_r, -half - ring_y));
-    }
-    points.extend(ring(r, half));
-    points.extend(ring(r, -half));
-    points
 }
 
 #[cfg(test)]

@@ -14,29 +14,29 @@ use crate::sim::kinematics::{
 };
 
 /// Joint-space speed limit of the trapezoidal moves (rad/s).
-pub const JOINT_SPEED: f64 = 3.0;
+pub(crate) const JOINT_SPEED: f64 = 3.0;
 /// Joint-space acceleration limit (rad/s²).
-pub const JOINT_ACCELERATION: f64 = 6.0;
+pub(crate) const JOINT_ACCELERATION: f64 = 6.0;
 /// Joint-space acceleration limit while carrying an object (rad/s²).
-pub const CARRY_ACCELERATION: f64 = 2.0;
+pub(crate) const CARRY_ACCELERATION: f64 = 2.0;
 /// Cartesian speed of the vertical descent and lift (m/s).
-pub const LINE_SPEED: f64 = 0.5;
+pub(crate) const LINE_SPEED: f64 = 0.5;
 /// Cartesian acceleration of the vertical descent and lift (m/s²).
-pub const LINE_ACCELERATION: f64 = 2.0;
+pub(crate) const LINE_ACCELERATION: f64 = 2.0;
 /// Height of the approach point above the target, and of the lift (m).
-pub const APPROACH_HEIGHT: f32 = 0.3;
+pub(crate) const APPROACH_HEIGHT: f32 = 0.3;
 /// Height an object must rise for a grasp to count (m).
-pub const LIFT_SUCCESS_HEIGHT: f32 = 0.2;
+pub(crate) const LIFT_SUCCESS_HEIGHT: f32 = 0.2;
 /// A force this large between the arm (or fingers) and an object stops the arm (N): the
 /// UR5's default protective-stop force.
-pub const OBJECT_FORCE_LIMIT: f32 = 150.0;
+pub(crate) const OBJECT_FORCE_LIMIT: f32 = 150.0;
 /// Penetration into the totes or ground that counts as a collision (m).
-pub const ENVIRONMENT_PENETRATION: f32 = 0.002;
+pub(crate) const ENVIRONMENT_PENETRATION: f32 = 0.002;
 /// An object pushed this deep into the totes or ground during a guarded move stops the arm
 /// (m), counted from where it was when the move began.
-pub const OBJECT_PRESSED_DEPTH: f32 = 0.005;
+pub(crate) const OBJECT_PRESSED_DEPTH: f32 = 0.005;
 /// Below this opening the fingers count as fully closed (m).
-pub const CLOSED_OPENING: f32 = 0.004;
+pub(crate) const CLOSED_OPENING: f32 = 0.004;
 /// Longest wait for the fingers to open (s).
 const OPEN_WAIT: f32 = 0.6;
 /// Longest wait for the fingers to close on an object (s).
@@ -73,7 +73,7 @@ pub enum PickReason {
 
 impl PickReason {
     /// The snake_case name used in reports.
-    pub fn as_str(self) -> &'static str {
+    pub(crate) fn as_str(self) -> &'static str {
         match self {
             PickReason::Success => "success",
             PickReason::EmptyHand => "empty_hand",
@@ -95,16 +95,16 @@ pub struct PickOutcome {
     /// Human-readable detail (what collided, how far the object rose...).
     pub detail: String,
     /// Name of the object that was held, when any was.
-    pub object: Option<String>,
+    pub(crate) object: Option<String>,
     /// Where the held object came to rest after placing.
-    pub placed: Option<ObjectLocation>,
+    pub(crate) placed: Option<ObjectLocation>,
     /// Simulated seconds the attempt took.
-    pub sim_seconds: f64,
+    pub(crate) sim_seconds: f64,
 }
 
 impl PickOutcome {
     /// A failed attempt in which nothing was held (the time is filled in by [`Workcell::pick`]).
-    pub fn failure(reason: PickReason, detail: String) -> Self {
+    pub(crate) fn failure(reason: PickReason, detail: String) -> Self {
         Self {
             success: false,
             reason,
@@ -118,7 +118,7 @@ impl PickOutcome {
 
 /// What stopped the arm: the protective stops of a real UR5 and the gripper's guard.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum CollisionStop {
+pub(crate) enum CollisionStop {
     /// An arm link or the palm entered a tote or the ground.
     #[error("the arm hit the bin or the ground")]
     ArmHitEnvironment,

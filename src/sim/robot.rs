@@ -20,29 +20,29 @@ use crate::sim::kinematics::Joints;
 pub(crate) mod groups {
     use rapier3d::prelude::{Group, InteractionGroups, InteractionTestMode};
 
-    pub const ENVIRONMENT: Group = Group::GROUP_1;
-    pub const PEDESTAL: Group = Group::GROUP_2;
-    pub const ARM: Group = Group::GROUP_3;
-    pub const FINGER: Group = Group::GROUP_4;
-    pub const OBJECT: Group = Group::GROUP_5;
+    pub(crate) const ENVIRONMENT: Group = Group::GROUP_1;
+    pub(crate) const PEDESTAL: Group = Group::GROUP_2;
+    pub(crate) const ARM: Group = Group::GROUP_3;
+    pub(crate) const FINGER: Group = Group::GROUP_4;
+    pub(crate) const OBJECT: Group = Group::GROUP_5;
 
     fn groups(member: Group, filter: Group) -> InteractionGroups {
         InteractionGroups::new(member, filter, InteractionTestMode::And)
     }
-    pub fn environment() -> InteractionGroups {
+    pub(crate) fn environment() -> InteractionGroups {
         groups(ENVIRONMENT, ARM.union(FINGER).union(OBJECT))
     }
     /// The arm stands on its pedestal, so only objects may touch it.
-    pub fn pedestal() -> InteractionGroups {
+    pub(crate) fn pedestal() -> InteractionGroups {
         groups(PEDESTAL, OBJECT)
     }
-    pub fn arm() -> InteractionGroups {
+    pub(crate) fn arm() -> InteractionGroups {
         groups(ARM, ENVIRONMENT.union(OBJECT))
     }
-    pub fn finger() -> InteractionGroups {
+    pub(crate) fn finger() -> InteractionGroups {
         groups(FINGER, ENVIRONMENT.union(OBJECT))
     }
-    pub fn object() -> InteractionGroups {
+    pub(crate) fn object() -> InteractionGroups {
         groups(
             OBJECT,
             ENVIRONMENT
@@ -53,7 +53,7 @@ pub(crate) mod groups {
         )
     }
     /// Parked: the arm and hand touch nothing while objects are dropped past them.
-    pub fn none() -> InteractionGroups {
+    pub(crate) fn none() -> InteractionGroups {
         groups(Group::NONE, Group::NONE)
     }
 }
@@ -62,6 +62,69 @@ pub(crate) mod groups {
 const LINK_SETBACK: f32 = 0.006;
 /// Each finger's mass (kg); lighter fingers made the joint solve unstable.
 const FINGER_MASS: f32 = 0.3;
+
+/// The URDF's links in topological order from the root, with their joints and visuals, and
+/// each chain slot's index among the URDF's links.
+fn kinematic_chain(
+    robot: &urdf_rs::Robot,
+    file: &UrdfFile,
+) -> anyhow::Result<(Vec<ChainLink>, Vec<usize>)> {
+    let links = &robot.links;
+    let find_link = |name: &str| links.iter().position(|l| l.name == name);
+    // Topological order from the root (the one link that is nobody's child).
+    let root = links
+        .iter()
+        .position(|l| robot.joints.iter().all(|j| j.child.link != l.name))
+        .context("robot urdf has no root link")?;
+    let mut order = vec![root];
+    let mut chain = vec![ChainLink {
+        parent: None,
+        origin: Pose::IDENTITY,
+        axis: Vector::Z,
+        joint: None,
+        body: None,
+        visuals: file.link_geometry(root)?.visuals,
+    }];
+    let mut cursor = 0;
+    while cursor < order.len() {
+        let parent_name = &links[order[cursor]].name;
+        for joint in robot
+            .joints
+            .iter()
+            .filter(|j| &j.parent.link == parent_name)
+        {
+            let child = find_link(&joint.child.link)
+                .with_context(|| format!("joint {} names unknown link", joint.name))?;
+            let [x, y, z] = joint.origin.xyz.0;
+            let [r, p, yw] = joint.origin.rpy.0;
+            let axis = joint.axis.xyz.0;
+            let joint_index = match joint.joint_type {
+                urdf_rs::JointType::Fixed => None,
+                urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => Some(
+                    JOINT_NAMES
+                        .iter()
+                        .position(|n| *n == joint.name)
+                        .with_context(|| format!("unexpected ur5 joint '{}'", joint.name))?,
+                ),
+                ref other => bail!("joint {} has unsupported type {other:?}", joint.name),
+            };
+            chain.push(ChainLink {
+                parent: Some(cursor),
+                origin: Pose::from_parts(
+                    Vector::new(x as f32, y as f32, z as f32),
+                    rpy_rotation(r, p, yw),
+                ),
+                axis: Vector::new(axis[0] as f32, axis[1] as f32, axis[2] as f32).normalize(),
+                joint: joint_index,
+                body: None,
+                visuals: file.link_geometry(child)?.visuals,
+            });
+            order.push(child);
+        }
+        cursor += 1;
+    }
+    Ok((chain, order))
+}
 
 /// One link of the URDF chain, in topological order.
 #[derive(Debug, Clone)]
@@ -80,12 +143,12 @@ pub(crate) struct Arm {
     base: Pose,
     chain: Vec<ChainLink>,
     tool0: usize,
-    pub colliders: Vec<ColliderHandle>,
-    pub joints: Joints,
+    pub(crate) colliders: Vec<ColliderHandle>,
+    pub(crate) joints: Joints,
 }
 
 /// Names of the six revolute joints, in joint-vector order.
-pub const JOINT_NAMES: [&str; 6] = [
+pub(crate) const JOINT_NAMES: [&str; 6] = [
     "shoulder_pan_joint",
     "shoulder_lift_joint",
     "elbow_joint",
@@ -96,7 +159,7 @@ pub const JOINT_NAMES: [&str; 6] = [
 
 impl Arm {
     /// Loads the URDF: rapier3d-urdf builds the colliders, urdf-rs gives the chain and visuals.
-    pub fn load(world: &mut PhysicsWorld, urdf: &str, base: Pose) -> anyhow::Result<Self> {
+    pub(crate) fn load(world: &mut PhysicsWorld, urdf: &str, base: Pose) -> anyhow::Result<Self> {
         let name = Path::new("bundled:ur5/ur5.urdf");
         let file = UrdfFile::parse(urdf, name)?;
         let options = UrdfLoaderOptions {
@@ -109,60 +172,8 @@ impl Arm {
         let (urdf_robot, robot) = UrdfRobot::from_str(urdf, options, Path::new("."))
             .with_context(|| format!("loading robot {}", name.display()))?;
 
+        let (mut chain, order) = kinematic_chain(&robot, &file)?;
         let links = &robot.links;
-        let find_link = |name: &str| links.iter().position(|l| l.name == name);
-        // Topological order from the root (the one link that is nobody's child).
-        let root = links
-            .iter()
-            .position(|l| robot.joints.iter().all(|j| j.child.link != l.name))
-            .context("robot urdf has no root link")?;
-        let mut order = vec![root];
-        let mut chain = vec![ChainLink {
-            parent: None,
-            origin: Pose::IDENTITY,
-            axis: Vector::Z,
-            joint: None,
-            body: None,
-            visuals: file.link_geometry(root)?.visuals,
-        }];
-        let mut cursor = 0;
-        while cursor < order.len() {
-            let parent_name = &links[order[cursor]].name;
-            for joint in robot
-                .joints
-                .iter()
-                .filter(|j| &j.parent.link == parent_name)
-            {
-                let child = find_link(&joint.child.link)
-                    .with_context(|| format!("joint {} names unknown link", joint.name))?;
-                let [x, y, z] = joint.origin.xyz.0;
-                let [r, p, yw] = joint.origin.rpy.0;
-                let axis = joint.axis.xyz.0;
-                let joint_index = match joint.joint_type {
-                    urdf_rs::JointType::Fixed => None,
-                    urdf_rs::JointType::Revolute | urdf_rs::JointType::Continuous => Some(
-                        JOINT_NAMES
-                            .iter()
-                            .position(|n| *n == joint.name)
-                            .with_context(|| format!("unexpected ur5 joint '{}'", joint.name))?,
-                    ),
-                    ref other => bail!("joint {} has unsupported type {other:?}", joint.name),
-                };
-                chain.push(ChainLink {
-                    parent: Some(cursor),
-                    origin: Pose::from_parts(
-                        Vector::new(x as f32, y as f32, z as f32),
-                        rpy_rotation(r, p, yw),
-                    ),
-                    axis: Vector::new(axis[0] as f32, axis[1] as f32, axis[2] as f32).normalize(),
-                    joint: joint_index,
-                    body: None,
-                    visuals: file.link_geometry(child)?.visuals,
-                });
-                order.push(child);
-            }
-            cursor += 1;
-        }
         let tool0 = order
             .iter()
             .position(|&l| links[l].name == "tool0")
@@ -216,12 +227,12 @@ impl Arm {
     }
 
     /// World pose of tool0 from the URDF chain.
-    pub fn tool0_pose(&self, q: &Joints) -> Pose {
+    pub(crate) fn tool0_pose(&self, q: &Joints) -> Pose {
         self.link_poses(q)[self.tool0]
     }
 
     /// Moves every link body to `q` at once; only for initial placement.
-    pub fn teleport(&mut self, world: &mut PhysicsWorld, q: Joints) {
+    pub(crate) fn teleport(&mut self, world: &mut PhysicsWorld, q: Joints) {
         for (link, pose) in self.chain.iter().zip(self.link_poses(&q)) {
             if let Some(body) = link.body.and_then(|h| world.bodies.get_mut(h)) {
                 body.set_position(pose, true);
@@ -231,7 +242,7 @@ impl Arm {
     }
 
     /// Schedules the kinematic bodies to reach `q` at the end of the next step.
-    pub fn drive(&mut self, world: &mut PhysicsWorld, q: Joints) {
+    pub(crate) fn drive(&mut self, world: &mut PhysicsWorld, q: Joints) {
         for (link, pose) in self.chain.iter().zip(self.link_poses(&q)) {
             if let Some(body) = link.body.and_then(|h| world.bodies.get_mut(h)) {
                 body.set_next_kinematic_position(pose);
@@ -241,7 +252,7 @@ impl Arm {
     }
 
     /// Drawable pieces in world coordinates for the current joints.
-    pub fn visuals(&self) -> impl Iterator<Item = (Pose, &Visual)> + '_ {
+    pub(crate) fn visuals(&self) -> impl Iterator<Item = (Pose, &Visual)> + '_ {
         let poses = self.link_poses(&self.joints);
         self.chain
             .iter()
@@ -252,11 +263,11 @@ impl Arm {
 
 /// The parallel-jaw gripper: a kinematic palm at tool0 and two motorised fingers.
 pub(crate) struct Gripper {
-    pub palm: RigidBodyHandle,
-    pub palm_collider: ColliderHandle,
-    pub fingers: [RigidBodyHandle; 2],
-    pub finger_colliders: [Vec<ColliderHandle>; 2],
-    pub pads: [ColliderHandle; 2],
+    pub(crate) palm: RigidBodyHandle,
+    pub(crate) palm_collider: ColliderHandle,
+    pub(crate) fingers: [RigidBodyHandle; 2],
+    pub(crate) finger_colliders: [Vec<ColliderHandle>; 2],
+    pub(crate) pads: [ColliderHandle; 2],
     joints: [ImpulseJointHandle; 2],
     force: f32,
 }
@@ -274,7 +285,12 @@ const FINGER_DAMPING: f32 = 1.0e8;
 
 impl Gripper {
     /// Builds the gripper open at `tool0`, with `force` newtons per finger.
-    pub fn new(world: &mut PhysicsWorld, tool0: Pose, force: f32, pad_friction: f32) -> Self {
+    pub(crate) fn new(
+        world: &mut PhysicsWorld,
+        tool0: Pose,
+        force: f32,
+        pad_friction: f32,
+    ) -> Self {
         let palm = world.insert_body(RigidBodyBuilder::kinematic_position_based().pose(tool0));
         let palm_collider = world.insert_collider(
             ColliderBuilder::cuboid(
@@ -388,7 +404,7 @@ impl Gripper {
     /// to bin 2 shook light objects out of the jaw. Held like this, a slide by x loads one
     /// finger less and leaves the other at the cap: a restoring force of x times the spring
     /// rate, while the grip stays bounded by `force`.
-    pub fn hold(&self, world: &mut PhysicsWorld) {
+    pub(crate) fn hold(&self, world: &mut PhysicsWorld) {
         let stiffness = self.force / HOLD_SQUEEZE;
         // Critically damped for the finger's own mass.
         let damping = 2.0 * (stiffness * FINGER_MASS).sqrt();
@@ -413,29 +429,29 @@ impl Gripper {
     }
 
     /// Starts closing with the bounded force.
-    pub fn close(&self, world: &mut PhysicsWorld) {
+    pub(crate) fn close(&self, world: &mut PhysicsWorld) {
         self.command(world, -FINGER_SPEED);
     }
 
     /// Starts opening.
-    pub fn open(&self, world: &mut PhysicsWorld) {
+    pub(crate) fn open(&self, world: &mut PhysicsWorld) {
         self.command(world, FINGER_SPEED);
     }
 
     /// Moves the palm with tool0 at the end of the next step.
-    pub fn drive(&self, world: &mut PhysicsWorld, tool0: Pose) {
+    pub(crate) fn drive(&self, world: &mut PhysicsWorld, tool0: Pose) {
         if let Some(palm) = world.bodies.get_mut(self.palm) {
             palm.set_next_kinematic_position(tool0);
         }
     }
 
     /// Distance between the pads' inner faces (m).
-    pub fn opening(&self, world: &PhysicsWorld) -> f32 {
+    pub(crate) fn opening(&self, world: &PhysicsWorld) -> f32 {
         self.finger_offset(world, self.fingers[0]) + self.finger_offset(world, self.fingers[1])
     }
 
     /// Largest finger speed relative to the palm (m/s), to tell when a close has finished.
-    pub fn finger_speed(&self, world: &PhysicsWorld) -> f32 {
+    pub(crate) fn finger_speed(&self, world: &PhysicsWorld) -> f32 {
         let palm = &world.bodies[self.palm];
         self.fingers
             .iter()
@@ -444,7 +460,7 @@ impl Gripper {
     }
 
     /// Sets every gripper collider's interaction groups (parking disables them).
-    pub fn set_collisions(&self, world: &mut PhysicsWorld, enabled: bool) {
+    pub(crate) fn set_collisions(&self, world: &mut PhysicsWorld, enabled: bool) {
         let mut set = |h: ColliderHandle, g: InteractionGroups| {
             if let Some(c) = world.colliders.get_mut(h) {
                 c.set_collision_groups(g);
@@ -471,7 +487,7 @@ impl Gripper {
     }
 
     /// The gripper's drawable boxes in world coordinates.
-    pub fn drawables(&self, world: &PhysicsWorld) -> Vec<(Pose, Vector, [f32; 3])> {
+    pub(crate) fn drawables(&self, world: &PhysicsWorld) -> Vec<(Pose, Vector, [f32; 3])> {
         let mut out = Vec::new();
         for (h, color) in std::iter::once((self.palm_collider, [0.15, 0.15, 0.17])).chain(
             self.finger_colliders

@@ -9,7 +9,7 @@ use rapier3d::math::{Pose, Rotation as Quat, Vector as Vec3};
 /// Height of the top-down camera's eye above the table (metres), as the reference sets it.
 // The reference's value, deliberately not 1/√2 (0.7071068): depth maps must match it exactly.
 #[allow(clippy::approx_constant)]
-pub const TOP_DOWN_EYE_HEIGHT: f32 = 0.70711;
+pub(crate) const TOP_DOWN_EYE_HEIGHT: f32 = 0.70711;
 
 /// An ideal pinhole camera (no distortion) with intrinsics in pixels and a rigid pose.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -19,19 +19,19 @@ pub struct Camera {
     /// Image height in pixels.
     pub height: u32,
     /// Focal length along `u`, in pixels.
-    pub fx: f32,
+    pub(crate) fx: f32,
     /// Focal length along `v`, in pixels.
-    pub fy: f32,
+    pub(crate) fy: f32,
     /// Principal point, column coordinate (continuous pixel units).
-    pub cx: f32,
+    pub(crate) cx: f32,
     /// Principal point, row coordinate (continuous pixel units).
-    pub cy: f32,
+    pub(crate) cy: f32,
     /// Near clipping depth in metres; surfaces closer than this are not seen.
-    pub near: f32,
+    pub(crate) near: f32,
     /// Far depth in metres; reported as the depth wherever nothing is hit.
-    pub far: f32,
+    pub(crate) far: f32,
     /// Camera-to-world pose: camera x = image right, y = image down, z = optical axis.
-    pub pose: Pose,
+    pub(crate) pose: Pose,
 }
 
 impl Camera {
@@ -55,7 +55,7 @@ impl Camera {
     /// Square pixels, principal point at the image centre, `near` = 0.01 m, `far` = 10 m
     /// (both public fields, adjust as needed). If `up` is parallel to the viewing direction
     /// an arbitrary perpendicular up vector is used instead.
-    pub fn look_at(
+    pub(crate) fn look_at(
         eye: Vec3,
         target: Vec3,
         up: Vec3,
@@ -89,14 +89,16 @@ impl Camera {
     }
 
     /// The optical centre in world coordinates.
-    pub fn eye(&self) -> Vec3 {
+    #[cfg(test)]
+    pub(crate) fn eye(&self) -> Vec3 {
         self.pose.translation
     }
 
     /// Unit world-space direction of the ray through the continuous image point `(u, v)`.
     ///
     /// Pass `(u + 0.5, v + 0.5)` for the centre of pixel `(u, v)`.
-    pub fn ray_direction(&self, u: f32, v: f32) -> Vec3 {
+    #[cfg(test)]
+    pub(crate) fn ray_direction(&self, u: f32, v: f32) -> Vec3 {
         (self.pose.rotation * self.camera_ray(u, v)).normalize()
     }
 
@@ -116,7 +118,7 @@ impl Camera {
     }
 
     /// World point seen through the centre of pixel `(u, v)` at optical-axis depth `depth`.
-    pub fn pixel_to_world(&self, u: u32, v: u32, depth: f32) -> Vec3 {
+    pub(crate) fn pixel_to_world(&self, u: u32, v: u32, depth: f32) -> Vec3 {
         let ray = self.camera_ray(u as f32 + 0.5, v as f32 + 0.5);
         self.pose.transform_point(ray * depth)
     }

@@ -1,7 +1,7 @@
 //! Colour maps for showing scalar fields (affordance maps) as images.
 
 /// Matplotlib's viridis colour map at `value` in [0, 1] (clamped), for affordance maps.
-pub fn viridis(value: f32) -> [u8; 3] {
+pub(crate) fn viridis(value: f32) -> [u8; 3] {
     // Eleven samples of the published map, linearly interpolated: indistinguishable at 8 bits
     // for display, and no lookup-table crate needed.
     const STOPS: [[f32; 3]; 11] = [

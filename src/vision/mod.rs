@@ -5,6 +5,6 @@
 //! numbers and conventions are in docs/camera.md.
 
 pub mod camera;
-pub mod colormap;
-pub mod raycast;
+pub(crate) mod colormap;
+pub(crate) mod raycast;
 pub mod render;

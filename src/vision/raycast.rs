@@ -5,7 +5,7 @@
 //! the smallest `t` in that interval where the ray crosses the surface, together with the
 //! unit outward normal there. A ray starting inside a solid therefore reports its exit point.
 //! Cylinders and capsules use parry's convention: the axis is local Y, centred on the origin.
-use rapier3d::math::{Pose, Rotation as Quat, Vector as Vec3};
+use rapier3d::math::Vector as Vec3;
 
 /// Tolerance on barycentric coordinates so rays through a shared mesh edge cannot slip
 /// between the two triangles through rounding.
@@ -13,18 +13,19 @@ const BARY_EPS: f32 = 1e-6;
 
 /// A ray–surface intersection.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Hit {
+pub(crate) struct Hit {
     /// Ray parameter of the hit, in multiples of the ray direction.
-    pub t: f32,
+    pub(crate) t: f32,
     /// Unit outward surface normal (for triangles: the face normal turned towards the ray
     /// origin, since triangle winding is not trusted).
-    pub normal: Vec3,
+    pub(crate) normal: Vec3,
 }
 
 /// Expresses a world-space ray in the local frame of a shape placed at `pose`
 /// (local-to-world). Rigid transforms preserve the ray parameter `t`.
-pub fn ray_to_local(pose: &Pose, origin: Vec3, dir: Vec3) -> (Vec3, Vec3) {
-    let to_local: Quat = pose.rotation.inverse();
+#[cfg(test)]
+pub(crate) fn ray_to_local(pose: &rapier3d::math::Pose, origin: Vec3, dir: Vec3) -> (Vec3, Vec3) {
+    let to_local = pose.rotation.inverse();
     (to_local * (origin - pose.translation), to_local * dir)
 }
 
@@ -60,7 +61,7 @@ impl Nearest {
 }
 
 /// Ray against the axis-aligned box `[-half, half]` (slab test).
-pub fn ray_cuboid(origin: Vec3, dir: Vec3, half: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
+pub(crate) fn ray_cuboid(origin: Vec3, dir: Vec3, half: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
     let mut t_enter = f32::NEG_INFINITY;
     let mut enter_axis = 0;
     let mut t_exit = f32::INFINITY;
@@ -107,7 +108,13 @@ fn axis_normal(axis: usize, sign: f32) -> Vec3 {
 }
 
 /// Ray against the sphere of `radius` centred on the origin.
-pub fn ray_sphere(origin: Vec3, dir: Vec3, radius: f32, tmin: f32, tmax: f32) -> Option<Hit> {
+pub(crate) fn ray_sphere(
+    origin: Vec3,
+    dir: Vec3,
+    radius: f32,
+    tmin: f32,
+    tmax: f32,
+) -> Option<Hit> {
     let mut nearest = Nearest::new(tmin, tmax);
     sphere_roots(origin, dir, radius, |t| {
         let p = origin + dir * t;
@@ -160,8 +167,20 @@ fn radial_normal(p: Vec3) -> Vec3 {
     Vec3::new(p.x, 0.0, p.z).normalize_or(Vec3::X)
 }
 
+/// Offers the ray's crossings of the round side (radius `radius` about local Y) within
+/// `|y| <= half`: the part that cylinders and capsules share.
+fn side_hits(mut nearest: Nearest, origin: Vec3, dir: Vec3, radius: f32, half: f32) -> Nearest {
+    side_roots(origin, dir, radius, |t| {
+        let p = origin + dir * t;
+        if p.y.abs() <= half {
+            nearest.offer(t, || radial_normal(p));
+        }
+    });
+    nearest
+}
+
 /// Ray against the finite capped cylinder with axis local Y, `|y| <= half_height`.
-pub fn ray_cylinder(
+pub(crate) fn ray_cylinder(
     origin: Vec3,
     dir: Vec3,
     radius: f32,
@@ -169,13 +188,7 @@ pub fn ray_cylinder(
     tmin: f32,
     tmax: f32,
 ) -> Option<Hit> {
-    let mut nearest = Nearest::new(tmin, tmax);
-    side_roots(origin, dir, radius, |t| {
-        let p = origin + dir * t;
-        if p.y.abs() <= half_height {
-            nearest.offer(t, || radial_normal(p));
-        }
-    });
+    let mut nearest = side_hits(Nearest::new(tmin, tmax), origin, dir, radius, half_height);
     if dir.y != 0.0 {
         for sign in [-1.0f32, 1.0] {
             let t = (sign * half_height - origin.y) / dir.y;
@@ -191,7 +204,7 @@ pub fn ray_cylinder(
 }
 
 /// Ray against the capsule around the local-Y segment from `-half_height` to `+half_height`.
-pub fn ray_capsule(
+pub(crate) fn ray_capsule(
     origin: Vec3,
     dir: Vec3,
     radius: f32,
@@ -199,13 +212,7 @@ pub fn ray_capsule(
     tmin: f32,
     tmax: f32,
 ) -> Option<Hit> {
-    let mut nearest = Nearest::new(tmin, tmax);
-    side_roots(origin, dir, radius, |t| {
-        let p = origin + dir * t;
-        if p.y.abs() <= half_height {
-            nearest.offer(t, || radial_normal(p));
-        }
-    });
+    let mut nearest = side_hits(Nearest::new(tmin, tmax), origin, dir, radius, half_height);
     // Each end sphere only contributes the part of its surface beyond its end of the
     // segment; the rest lies inside the capsule.
     for sign in [-1.0f32, 1.0] {
@@ -222,7 +229,7 @@ pub fn ray_capsule(
 }
 
 /// Ray against the triangle `(a, b, c)` (Möller–Trumbore), hit from either side.
-pub fn ray_triangle(
+pub(crate) fn ray_triangle(
     origin: Vec3,
     dir: Vec3,
     [a, b, c]: [Vec3; 3],
@@ -262,6 +269,7 @@ mod tests {
     use super::*;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
+    use rapier3d::math::{Pose, Rotation as Quat};
 
     /// Exact signed distance functions, an independent description of each surface.
     #[derive(Clone, Copy, Debug)]

@@ -5,7 +5,6 @@
 //! each mesh triangle) only casts rays for the pixels inside the image rectangle its
 //! bounding box projects to, and a depth buffer keeps the nearest hit. Ray directions are
 //! scaled to unit optical-axis depth, so every ray parameter *is* the depth.
-use std::path::Path;
 use std::sync::Arc;
 
 use rapier3d::math::{Pose, Rotation as Quat, Vector as Vec3};
@@ -14,13 +13,13 @@ use crate::vision::camera::Camera;
 use crate::vision::raycast::{self, Hit};
 
 /// Background colour where no surface is hit (a light sky blue).
-pub const SKY_RGB: [u8; 3] = [200, 222, 245];
+pub(crate) const SKY_RGB: [u8; 3] = [200, 222, 245];
 
 /// Fraction of the albedo that is lit regardless of orientation.
-pub const AMBIENT: f32 = 0.35;
+pub(crate) const AMBIENT: f32 = 0.35;
 
 /// Direction towards the single directional light (world frame, not normalised).
-pub const LIGHT_TOWARDS: [f32; 3] = [0.3, -0.2, 1.0];
+pub(crate) const LIGHT_TOWARDS: [f32; 3] = [0.3, -0.2, 1.0];
 
 /// Geometry of a drawable, in its local frame.
 #[derive(Debug, Clone)]
@@ -79,13 +78,13 @@ pub struct Drawable {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Frame {
     /// Width in pixels.
-    pub width: u32,
+    pub(crate) width: u32,
     /// Height in pixels.
-    pub height: u32,
+    pub(crate) height: u32,
     /// Interleaved 8-bit RGB, `3 · width · height` bytes.
-    pub rgb: Vec<u8>,
+    pub(crate) rgb: Vec<u8>,
     /// Depth along the optical axis in metres; the camera's `far` where nothing is hit.
-    pub depth: Vec<f32>,
+    pub(crate) depth: Vec<f32>,
     /// [`Drawable::id`] of the visible surface; 0 where nothing is hit.
     pub mask: Vec<u16>,
 }
@@ -104,7 +103,14 @@ pub fn render(camera: &Camera, scene: &[Drawable]) -> Frame {
 ///
 /// Meshes are tested triangle by triangle (no acceleration structure), and their normal
 /// faces the ray origin.
-pub fn cast_ray(drawable: &Drawable, origin: Vec3, dir: Vec3, tmin: f32, tmax: f32) -> Option<Hit> {
+#[cfg(test)]
+pub(crate) fn cast_ray(
+    drawable: &Drawable,
+    origin: Vec3,
+    dir: Vec3,
+    tmin: f32,
+    tmax: f32,
+) -> Option<Hit> {
     let (o, d) = raycast::ray_to_local(&drawable.pose, origin, dir);
     let hit = match &drawable.shape {
         Shape::Cuboid { half_extents } => raycast::ray_cuboid(o, d, *half_extents, tmin, tmax),
@@ -141,17 +147,18 @@ pub fn cast_ray(drawable: &Drawable, origin: Vec3, dir: Vec3, tmin: f32, tmax: f
 
 impl Frame {
     /// Depth in metres at pixel `(u, v)`. Panics if the pixel is outside the image.
-    pub fn depth_at(&self, u: u32, v: u32) -> f32 {
+    pub(crate) fn depth_at(&self, u: u32, v: u32) -> f32 {
         self.depth[self.index(u, v)]
     }
 
     /// Drawable id at pixel `(u, v)`. Panics if the pixel is outside the image.
-    pub fn id_at(&self, u: u32, v: u32) -> u16 {
+    pub(crate) fn id_at(&self, u: u32, v: u32) -> u16 {
         self.mask[self.index(u, v)]
     }
 
     /// RGB colour at pixel `(u, v)`. Panics if the pixel is outside the image.
-    pub fn rgb_at(&self, u: u32, v: u32) -> [u8; 3] {
+    #[cfg(test)]
+    pub(crate) fn rgb_at(&self, u: u32, v: u32) -> [u8; 3] {
         let i = 3 * self.index(u, v);
         [self.rgb[i], self.rgb[i + 1], self.rgb[i + 2]]
     }
@@ -167,14 +174,14 @@ impl Frame {
     }
 
     /// The colour image.
-    pub fn to_rgb_image(&self) -> image::RgbImage {
+    pub(crate) fn to_rgb_image(&self) -> image::RgbImage {
         image::RgbImage::from_raw(self.width, self.height, self.rgb.clone())
             .expect("rgb buffer length matches the frame size")
     }
 
     /// Depth as 16-bit millimetres: `round(depth · 1000)`, saturating to 0..=65535
     /// (NaN becomes 0).
-    pub fn to_depth_image_mm(&self) -> image::ImageBuffer<image::Luma<u16>, Vec<u16>> {
+    pub(crate) fn to_depth_image_mm(&self) -> image::ImageBuffer<image::Luma<u16>, Vec<u16>> {
         // `as` from float to integer saturates and maps NaN to 0, which is the contract.
         let mm = self
             .depth
@@ -184,40 +191,6 @@ impl Frame {
         image::ImageBuffer::from_raw(self.width, self.height, mm)
             .expect("depth buffer length matches the frame size")
     }
-
-    /// Writes the colour image as PNG (via a temporary file in the same directory and a
-    /// rename, so readers never see a partial file).
-    pub fn save_rgb_png(&self, path: impl AsRef<Path>) -> image::ImageResult<()> {
-        save_atomically(path.as_ref(), |tmp| {
-            self.to_rgb_image()
-                .save_with_format(tmp, image::ImageFormat::Png)
-        })
-    }
-
-    /// Writes [`Frame::to_depth_image_mm`] as a 16-bit grey PNG (atomically, like
-    /// [`Frame::save_rgb_png`]).
-    pub fn save_depth_png_mm(&self, path: impl AsRef<Path>) -> image::ImageResult<()> {
-        save_atomically(path.as_ref(), |tmp| {
-            self.to_depth_image_mm()
-                .save_with_format(tmp, image::ImageFormat::Png)
-        })
-    }
-}
-
-fn save_atomically(
-    path: &Path,
-    write: impl FnOnce(&Path) -> image::ImageResult<()>,
-) -> image::ImageResult<()> {
-    let name = path
-        .file_name()
-        .map_or_else(|| "frame".into(), |n| n.to_string_lossy().into_owned());
-    let tmp = path.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-    let result = write(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(Into::into));
-    if result.is_err() {
-        // Best effort: the original error is the one worth reporting.
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result
 }
 
 fn triangle_vertices(vertices: &[Vec3], tri: &[u32; 3]) -> Option<[Vec3; 3]> {
@@ -810,8 +783,8 @@ mod tests {
         std::fs::create_dir_all(&dir).unwrap();
         let rgb_path = dir.join("rgb.png");
         let depth_path = dir.join("depth.png");
-        frame.save_rgb_png(&rgb_path).unwrap();
-        frame.save_depth_png_mm(&depth_path).unwrap();
+        crate::data::atomic::save_image_atomic(&frame.to_rgb_image(), &rgb_path).unwrap();
+        crate::data::atomic::save_image_atomic(&frame.to_depth_image_mm(), &depth_path).unwrap();
         let rgb = image::open(&rgb_path).unwrap().into_rgb8();
         let depth = image::open(&depth_path).unwrap().into_luma16();
         let leftovers = std::fs::read_dir(&dir).unwrap().count();

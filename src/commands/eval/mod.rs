@@ -19,7 +19,7 @@ use crate::grasp::draw::draw_grasp;
 use crate::grasp::world_grasp;
 use crate::model::inference::AffordanceModel;
 use crate::model::unet::Precision;
-use crate::named::Named;
+use crate::named::named_enum;
 use crate::policy::affordance::{Suppression, SuppressionConfig};
 use crate::policy::baselines::{OraclePolicy, RandomPolicy};
 use crate::policy::model::{ModelPolicy, ModelPolicyConfig};
@@ -29,52 +29,32 @@ use crate::sim::{ObjectLocation, Workcell, WorkcellConfig};
 use results::{report_lines, summarise, AttemptRecord, AttemptTiming, BinOutcome, SceneRun};
 
 /// Attempts per object in the train and test tasks (the reference's).
-pub const ATTEMPTS_PER_OBJECT: u32 = 3;
+pub(crate) const ATTEMPTS_PER_OBJECT: u32 = 3;
 /// Offset of the train/test drop seeds (the reference's): seed + 100·i + a + 10000.
-pub const SINGLE_OBJECT_SEED_OFFSET: u64 = 10_000;
+pub(crate) const SINGLE_OBJECT_SEED_OFFSET: u64 = 10_000;
 /// Physics steps between episode video frames: 10 fps, so that a 25-attempt episode stays
 /// near 15 MB (`grasp --record` films one attempt at 24 fps).
-pub const EPISODE_EVERY_STEPS: u64 = 24;
+pub(crate) const EPISODE_EVERY_STEPS: u64 = 24;
 /// GIF frame delay matching [`EPISODE_EVERY_STEPS`] at 240 Hz, in hundredths of a second.
-pub const EPISODE_DELAY_CS: u32 = 10;
+pub(crate) const EPISODE_DELAY_CS: u32 = 10;
 /// The default empty_bin scene (the reference's).
-pub const DEFAULT_EMPTY_BIN_SEED: u64 = 2;
+pub(crate) const DEFAULT_EMPTY_BIN_SEED: u64 = 2;
 
-/// The evaluations, spelled as the reference spells them.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Task {
-    /// Each training object alone, 3 attempts each.
-    Train,
-    /// Each test (unseen) object alone, 3 attempts each.
-    Test,
-    /// All 15 objects in bin 1 at once; move as many as possible to bin 2.
-    EmptyBin,
-}
-
-impl Named for Task {
-    const ALL: &'static [Self] = &[Self::Train, Self::Test, Self::EmptyBin];
-
-    fn name(self) -> &'static str {
-        match self {
-            Self::Train => "train",
-            Self::Test => "test",
-            Self::EmptyBin => "empty_bin",
-        }
-    }
-
-    fn help(self) -> &'static str {
-        match self {
-            Self::Train => "each training object alone, 3 attempts each",
-            Self::Test => "each test (unseen) object alone, 3 attempts each",
-            Self::EmptyBin => "all 15 objects in bin 1 at once; move as many as possible to bin 2",
-        }
+named_enum! {
+    /// The evaluations, spelled as the reference spells them.
+    pub enum Task {
+        /// Each training object alone, 3 attempts each.
+        Train = "train", "each training object alone, 3 attempts each",
+        /// Each test (unseen) object alone, 3 attempts each.
+        Test = "test", "each test (unseen) object alone, 3 attempts each",
+        /// All 15 objects in bin 1 at once; move as many as possible to bin 2.
+        EmptyBin = "empty_bin", "all 15 objects in bin 1 at once; move as many as possible to bin 2",
     }
 }
 
 impl Task {
     /// The seed a run without `--seed` uses: 2 for empty_bin, 0 otherwise (the reference's).
-    pub fn default_seed(self) -> u64 {
+    pub(crate) fn default_seed(self) -> u64 {
         match self {
             Task::EmptyBin => DEFAULT_EMPTY_BIN_SEED,
             Task::Train | Task::Test => 0,
@@ -82,59 +62,39 @@ impl Task {
     }
 }
 
-/// Who chooses the grasps.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum PolicyKind {
-    /// The trained affordance model.
-    Model,
-    /// A random pixel of bin 1's floor and a random angle.
-    Random,
-    /// The planner, from ground-truth masks and depth.
-    Oracle,
-}
-
-impl Named for PolicyKind {
-    const ALL: &'static [Self] = &[Self::Model, Self::Random, Self::Oracle];
-
-    fn name(self) -> &'static str {
-        match self {
-            Self::Model => "model",
-            Self::Random => "random",
-            Self::Oracle => "oracle",
-        }
-    }
-
-    fn help(self) -> &'static str {
-        match self {
-            Self::Model => "the trained affordance model (argmax over 8 rotations)",
-            Self::Random => "a uniformly random point of bin 1's floor and a random angle",
-            Self::Oracle => "the workcell's planner, from ground-truth masks and depth",
-        }
+named_enum! {
+    /// Who chooses the grasps.
+    pub enum PolicyKind {
+        /// The trained affordance model.
+        Model = "model", "the trained affordance model (argmax over 8 rotations)",
+        /// A random point of bin 1's floor and a random angle.
+        Random = "random", "a uniformly random point of bin 1's floor and a random angle",
+        /// The planner, from ground-truth masks and depth.
+        Oracle = "oracle", "the workcell's planner, from ground-truth masks and depth",
     }
 }
 
 /// Everything one `graspmap eval` run needs, resolved and checked by the CLI.
 #[derive(Debug, Clone)]
-pub struct EvalConfig {
+pub(crate) struct EvalConfig {
     /// Which evaluation.
-    pub task: Task,
+    pub(crate) task: Task,
     /// Who chooses the grasps.
-    pub policy: PolicyKind,
+    pub(crate) policy: PolicyKind,
     /// The model's weights (model policy).
-    pub checkpoint: PathBuf,
+    pub(crate) checkpoint: PathBuf,
     /// Arithmetic of the network.
-    pub precision: Precision,
+    pub(crate) precision: Precision,
     /// Base seeds, run one after another and aggregated.
-    pub seeds: Vec<u64>,
+    pub(crate) seeds: Vec<u64>,
     /// Failure suppression (model policy).
-    pub suppression: SuppressionConfig,
+    pub(crate) suppression: SuppressionConfig,
     /// The model policy's checks.
-    pub model: ModelPolicyConfig,
+    pub(crate) model: ModelPolicyConfig,
     /// empty_bin: most pick attempts per scene. Default 25.
-    pub max_attempts: u32,
+    pub(crate) max_attempts: u32,
     /// Where to write the episode video (one seed only).
-    pub record: Option<PathBuf>,
+    pub(crate) record: Option<PathBuf>,
 }
 
 /// Settings shared by every scene of one evaluation.
@@ -152,7 +112,7 @@ struct Evaluation<'a> {
 }
 
 /// Runs the command.
-pub fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
+pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
     let start = Instant::now();
     let seeds = config.seeds.clone();
     crate::model::use_threads(context.threads);

@@ -14,122 +14,96 @@ use crate::sim::ObjectLocation;
 
 /// Wall seconds of one attempt, by what they were spent on.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
-pub struct AttemptTiming {
+pub(crate) struct AttemptTiming {
     /// Everything, from the drop (train/test) or the previous attempt (empty_bin) to the report.
-    pub wall: f64,
+    pub(crate) wall: f64,
     /// Physics: the drop (train/test) and the pick.
-    pub sim: f64,
+    pub(crate) sim: f64,
     /// The top-down camera image.
-    pub render: f64,
+    pub(crate) render: f64,
     /// Rotations, network, suppression and argmax (model policy).
-    pub network: f64,
+    pub(crate) network: f64,
 }
 
 /// One pick attempt.
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct AttemptRecord {
+pub(crate) struct AttemptRecord {
     /// The scene's drop seed.
-    pub drop_seed: u64,
+    pub(crate) drop_seed: u64,
     /// 0-based attempt number (per object in train/test, per scene in empty_bin).
-    pub attempt: u32,
+    pub(crate) attempt: u32,
     /// train/test: the object alone in the bin.
-    pub object: Option<String>,
+    pub(crate) object: Option<String>,
     /// The grasp executed; absent when the policy found none.
-    pub grasp: Option<PixelGrasp>,
+    pub(crate) grasp: Option<PixelGrasp>,
     /// Model policy: the map the grasp came from and its score there.
-    pub choice: Option<Choice>,
+    pub(crate) choice: Option<Choice>,
     /// Whether an object was lifted, carried and placed.
-    pub success: bool,
+    pub(crate) success: bool,
     /// Why the attempt ended so.
-    pub reason: PickReason,
+    pub(crate) reason: PickReason,
     /// Human-readable detail.
-    pub detail: String,
+    pub(crate) detail: String,
     /// The object whose surface the camera saw at the grasp centre (ground truth, for the
     /// report only; no policy sees it).
-    pub aimed_at: Option<String>,
+    pub(crate) aimed_at: Option<String>,
     /// The object that was held, if any.
-    pub held: Option<String>,
+    pub(crate) held: Option<String>,
     /// empty_bin: objects in bin 2 after this attempt.
-    pub moved: Option<usize>,
+    pub(crate) moved: Option<usize>,
     /// Where the visualisation went.
-    pub vis: Option<PathBuf>,
+    pub(crate) vis: Option<PathBuf>,
     /// Where the time went.
-    pub timing: AttemptTiming,
+    pub(crate) timing: AttemptTiming,
 }
 
 /// empty_bin: where each object ended up.
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct BinOutcome {
+pub(crate) struct BinOutcome {
     /// Objects resting in bin 2.
-    pub moved: usize,
+    pub(crate) moved: usize,
     /// Objects resting in bin 1.
-    pub left: usize,
+    pub(crate) left: usize,
     /// Objects anywhere else.
-    pub lost: usize,
+    pub(crate) lost: usize,
     /// Each object's final place.
-    pub locations: BTreeMap<String, ObjectLocation>,
+    pub(crate) locations: BTreeMap<String, ObjectLocation>,
 }
 
 /// One scene seed's run.
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct SceneRun {
+pub(crate) struct SceneRun {
     /// The base seed.
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// Every attempt, in order.
-    pub attempts: Vec<AttemptRecord>,
+    pub(crate) attempts: Vec<AttemptRecord>,
     /// empty_bin only.
-    pub bin: Option<BinOutcome>,
-}
-
-/// Per-object line of the train/test table.
-#[derive(Debug, Clone, serde::Serialize)]
-pub struct ObjectSummary {
-    /// Object name.
-    pub object: String,
-    /// Its attempts over all seeds.
-    pub attempts: usize,
-    /// Its successes.
-    pub successes: usize,
-    /// Failure reasons and how often each happened.
-    pub failures: FailureTally,
-}
-
-/// Mean per-attempt time.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
-pub struct TimingSummary {
-    /// Attempts timed.
-    pub attempts: usize,
-    /// Mean of each part.
-    pub mean: AttemptTiming,
-    /// Median wall seconds.
-    pub median_wall: f64,
-    /// Wall seconds of the whole evaluation.
-    pub total_wall: f64,
+    pub(crate) bin: Option<BinOutcome>,
 }
 
 /// Everything `eval --json` reports.
 #[derive(Debug, Clone, serde::Serialize)]
-pub struct EvalResults {
+pub(crate) struct EvalResults {
     /// train, test or empty_bin.
-    pub task: Task,
+    pub(crate) task: Task,
     /// model, random or oracle.
-    pub policy: PolicyKind,
+    pub(crate) policy: PolicyKind,
     /// The base seeds run.
-    pub seeds: Vec<u64>,
+    pub(crate) seeds: Vec<u64>,
     /// Pick success over all attempts, with its 95 % Wilson interval.
-    pub success: Rate,
+    pub(crate) success: Rate,
     /// train/test: by object.
-    pub per_object: Vec<ObjectSummary>,
+    pub(crate) per_object: Vec<ObjectSummary>,
     /// empty_bin: objects moved per scene (mean ± std over seeds).
-    pub moved: Option<Spread>,
+    pub(crate) moved: Option<Spread>,
     /// empty_bin: objects left in bin 1 per scene.
-    pub left: Option<Spread>,
+    pub(crate) left: Option<Spread>,
     /// empty_bin: objects lost per scene.
-    pub lost: Option<Spread>,
+    pub(crate) lost: Option<Spread>,
     /// Every scene and attempt.
-    pub runs: Vec<SceneRun>,
+    pub(crate) runs: Vec<SceneRun>,
     /// Where the time went.
-    pub timing: TimingSummary,
+    pub(crate) timing: TimingSummary,
 }
 
 /// The report of a whole evaluation from its scenes.
@@ -198,6 +172,19 @@ pub(super) fn summarise(
         },
         runs,
     }
+}
+
+/// Per-object line of the train/test table.
+#[derive(Debug, Clone, serde::Serialize)]
+pub(crate) struct ObjectSummary {
+    /// Object name.
+    pub(crate) object: String,
+    /// Its attempts over all seeds.
+    pub(crate) attempts: usize,
+    /// Its successes.
+    pub(crate) successes: usize,
+    /// Failure reasons and how often each happened.
+    pub(crate) failures: FailureTally,
 }
 
 /// The failure reasons of a set of attempts.
@@ -299,4 +286,17 @@ pub(super) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
         t.total_wall
     ));
     lines
+}
+
+/// Mean per-attempt time.
+#[derive(Debug, Clone, Copy, serde::Serialize)]
+pub(crate) struct TimingSummary {
+    /// Attempts timed.
+    pub(crate) attempts: usize,
+    /// Mean of each part.
+    pub(crate) mean: AttemptTiming,
+    /// Median wall seconds.
+    pub(crate) median_wall: f64,
+    /// Wall seconds of the whole evaluation.
+    pub(crate) total_wall: f64,
 }

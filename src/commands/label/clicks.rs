@@ -20,7 +20,7 @@ use crate::vision::camera::Camera;
 use crate::vision::render::Frame;
 
 /// The angle step a person gets with the A/D keys: one angle bin.
-pub const ANGLE_STEP_DEG: f32 = BIN_DEG;
+pub(crate) const ANGLE_STEP_DEG: f32 = BIN_DEG;
 
 /// Where clicks come from.
 pub(super) enum Clicker {
@@ -156,7 +156,10 @@ pub(super) fn read_clicks(
         let grasp = match PixelGrasp::checked(number("x")?, number("y")?, number("angle")?) {
             Ok(grasp) => grasp,
             Err(PixelError::OutOfImage { axis, value, max }) => {
-                bail!("{}: \"{axis}\" = {value} must be an integer in 0..={max}", at())
+                bail!(
+                    "{}: \"{axis}\" = {value} must be an integer in 0..={max}",
+                    at()
+                )
             }
             Err(other) => bail!("{}: {other}", at()),
         };

@@ -21,26 +21,26 @@ use clicks::{check_enough_clicks, read_clicks, Clicker};
 
 /// One `graspmap label` run, resolved by the CLI.
 #[derive(Debug, Clone)]
-pub struct LabelConfig {
+pub(crate) struct LabelConfig {
     /// Successful labels wanted per training object. Default 12.
-    pub per_object: u32,
+    pub(crate) per_object: u32,
     /// Rounds allowed per object before giving up on it. Default 40.
-    pub max_rounds: u32,
+    pub(crate) max_rounds: u32,
     /// Base seed: round r of training object j drops with seed + 100·j + r. Default 0.
-    pub seed: u64,
+    pub(crate) seed: u64,
     /// Where clicks come from.
-    pub source: ClickSource,
+    pub(crate) source: ClickSource,
     /// Scripted clicks' human-like noise.
-    pub noise: ClickNoise,
+    pub(crate) noise: ClickNoise,
     /// Delete existing labels first.
-    pub force: bool,
+    pub(crate) force: bool,
     /// Only validate the existing dataset.
-    pub check: bool,
+    pub(crate) check: bool,
 }
 
 /// Where a round's click comes from.
 #[derive(Debug, Clone, PartialEq)]
-pub enum ClickSource {
+pub(crate) enum ClickSource {
     /// The oracle planner in 22.5° steps, with [`ClickNoise`].
     Scripted,
     /// A JSON list of {"object", "x", "y", "angle"}, one per round.
@@ -54,11 +54,11 @@ pub enum ClickSource {
 
 /// Standard deviations of the scripted clicker's noise.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct ClickNoise {
+pub(crate) struct ClickNoise {
     /// Of the click position, in pixels.
-    pub px: f32,
+    pub(crate) px: f32,
     /// Of the angle, in degrees (before snapping to 22.5°).
-    pub deg: f32,
+    pub(crate) deg: f32,
 }
 
 /// One object's tally.
@@ -86,7 +86,7 @@ struct LabelResults {
 }
 
 /// Runs the command.
-pub fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
+pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     let store = LabelStore::new(context.data.join("labels"));
     if args.check {
         return check(context, &store, &context.objects.names());
