@@ -18,6 +18,8 @@ pub mod assets;
 pub mod cli;
 pub(crate) mod commands;
 pub mod data;
+#[cfg(test)]
+mod fuzz;
 pub mod grasp;
 pub mod metrics;
 pub mod model;
@@ -25,3 +27,5 @@ pub(crate) mod named;
 pub mod policy;
 pub mod sim;
 pub mod vision;
+
+pub use commands::interrupt::Interrupted;

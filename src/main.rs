@@ -1,4 +1,5 @@
-//! The `graspmap` binary: parse flags, run, print errors as one line and exit 2.
+//! The `graspmap` binary: parse flags, run, print errors as one line and exit 2 (130 or 143
+//! after SIGINT or SIGTERM).
 
 use std::process::ExitCode;
 
@@ -6,10 +7,14 @@ fn main() -> ExitCode {
     keep_freed_memory();
     match graspmap::cli::run() {
         Ok(()) => ExitCode::SUCCESS,
-        Err(error) => {
-            eprintln!("error: {error:#}");
-            ExitCode::from(2)
-        }
+        Err(error) => match error.downcast_ref::<graspmap::Interrupted>() {
+            // The command has already said what it kept and how to continue.
+            Some(interrupted) => ExitCode::from(interrupted.exit_code()),
+            None => {
+                eprintln!("error: {error:#}");
+                ExitCode::from(2)
+            }
+        },
     }
 }
 

@@ -287,14 +287,24 @@ impl UrdfFile {
 }
 
 /// A mesh file split into its pieces (OBJ objects/groups, or one piece for STL).
-struct LoadedMesh {
+pub(crate) struct LoadedMesh {
     pieces: Vec<TriMesh>,
     color: Option<[f32; 3]>,
     texture: Option<PathBuf>,
 }
 
 fn load_mesh_file(path: &Path, scale: Vector) -> Result<LoadedMesh, String> {
-    let mut bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    let bytes = std::fs::read(path).map_err(|e| e.to_string())?;
+    load_mesh_bytes(bytes, path, scale)
+}
+
+/// Decodes an OBJ or STL mesh from its bytes; `path` gives the format (by extension) and
+/// locates an OBJ's material library and textures.
+pub(crate) fn load_mesh_bytes(
+    mut bytes: Vec<u8>,
+    path: &Path,
+    scale: Vector,
+) -> Result<LoadedMesh, String> {
     if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("obj"))

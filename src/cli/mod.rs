@@ -221,6 +221,13 @@ pub(crate) struct EvalArgs {
     /// Arithmetic of the network.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
     pub(crate) precision: PrecisionChoice,
+    /// Continue an interrupted sweep: skip the scenes that the --json report already holds.
+    #[arg(long, conflicts_with = "record")]
+    pub(crate) resume: bool,
+    /// Check the physics after every step (finite poses, nothing sunk into the totes) and
+    /// report violations per attempt; slower, for scripts/soak.sh.
+    #[arg(long, hide = true)]
+    pub(crate) check_invariants: bool,
 }
 
 /// `graspmap predict`.
@@ -425,6 +432,7 @@ pub fn run() -> anyhow::Result<()> {
         }
     };
     init_logging(cli.global.quiet);
+    commands::interrupt::install().context("installing the Ctrl-C handler")?;
     let context = cli.global.context()?;
     let data = context.data.clone();
     match cli.command {
@@ -440,7 +448,10 @@ pub fn run() -> anyhow::Result<()> {
         Command::Grasp(args) => commands::grasp::run(&context, args.config()?),
         Command::Label(args) => commands::label::run(&context, args.config(&data)),
         Command::Train(args) => commands::train::run(&context, args.options()),
-        Command::Eval(args) => commands::eval::run(&context, args.config(&data)?),
+        Command::Eval(args) => {
+            let config = args.config(&data, context.json.as_deref())?;
+            commands::eval::run(&context, config)
+        }
         Command::Predict(args) => commands::predict::run(&context, args.config(&data)),
         Command::Bench(BenchCommand::Train(args)) => commands::bench::run(
             &context,

@@ -55,7 +55,10 @@ fn checkpoint_path(data: &Path, given: Option<PathBuf>) -> PathBuf {
 }
 
 impl EvalArgs {
-    pub(super) fn config(self, data: &Path) -> anyhow::Result<EvalConfig> {
+    pub(super) fn config(self, data: &Path, json: Option<&Path>) -> anyhow::Result<EvalConfig> {
+        if self.resume && json.is_none_or(|j| j == Path::new("-")) {
+            bail!("--resume continues the report that --json REPORT.json names; give both");
+        }
         let model = ModelPolicyConfig {
             check: self.collision_check,
             verify_top: self.verify_top,
@@ -82,6 +85,8 @@ impl EvalArgs {
             model,
             max_attempts: self.max_attempts,
             record: self.record,
+            resume: self.resume,
+            check_invariants: self.check_invariants,
         })
     }
 }

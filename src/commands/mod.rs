@@ -3,6 +3,7 @@
 pub(crate) mod bench;
 pub(crate) mod eval;
 pub(crate) mod grasp;
+pub mod interrupt;
 pub(crate) mod label;
 pub(crate) mod predict;
 pub(crate) mod report;

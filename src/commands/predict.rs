@@ -14,6 +14,9 @@ use crate::model::inference::AffordanceModel;
 use crate::model::unet::Precision;
 use crate::policy::affordance::{visualisation, Choice};
 
+/// Largest image side `predict` decodes before it checks for 128 × 128 (px).
+const MAX_DECODED_SIDE: u32 = 4096;
+
 /// What `graspmap predict` reads and writes, resolved by the CLI.
 #[derive(Debug, Clone)]
 pub(crate) struct PredictConfig {
@@ -96,17 +99,27 @@ pub(crate) fn run(context: &Context, args: PredictConfig) -> anyhow::Result<()> 
 
 /// Reads a 128 × 128 8-bit RGB image (an opaque RGBA one is accepted), or says what is wrong.
 pub(crate) fn read_observation(path: &Path) -> anyhow::Result<RgbImage> {
-    let decoded = image::ImageReader::open(path)
-        .with_context(|| format!("cannot open --image {}", path.display()))?
+    let bytes =
+        std::fs::read(path).with_context(|| format!("cannot open --image {}", path.display()))?;
+    decode_observation(&bytes, path)
+}
+
+/// Decodes an observation from its bytes (PNG or JPEG, by content); `path` names it in errors.
+pub(crate) fn decode_observation(bytes: &[u8], path: &Path) -> anyhow::Result<RgbImage> {
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
-        .with_context(|| format!("cannot read --image {}", path.display()))?
-        .decode()
-        .with_context(|| {
-            format!(
-                "--image {} is not a readable image (give a PNG or JPEG)",
-                path.display()
-            )
-        })?;
+        .with_context(|| format!("cannot read --image {}", path.display()))?;
+    // A header may claim any size; nothing near this is a camera image.
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(MAX_DECODED_SIDE);
+    limits.max_image_height = Some(MAX_DECODED_SIDE);
+    reader.limits(limits);
+    let decoded = reader.decode().with_context(|| {
+        format!(
+            "--image {} is not a readable image (give a PNG or JPEG)",
+            path.display()
+        )
+    })?;
     let (w, h) = (decoded.width(), decoded.height());
     if (w, h) != (IMAGE_SIZE, IMAGE_SIZE) {
         bail!(

@@ -10,7 +10,7 @@ use crate::data::atomic::write_atomic;
 /// The envelope of every `--json` report.
 #[derive(Debug, Serialize)]
 pub(crate) struct Report<'a, C: Serialize, R: Serialize> {
-    /// `graspmap.<command>/1`.
+    /// `graspmap.<command>/<version>`.
     pub(crate) schema: String,
     /// Crate version.
     pub(crate) version: &'static str,
@@ -32,8 +32,20 @@ pub(crate) fn write_report<C: Serialize, R: Serialize>(
     config: &C,
     results: &R,
 ) -> anyhow::Result<()> {
+    write_versioned_report(target, command, 1, seed, config, results)
+}
+
+/// Writes a report with schema `graspmap.<command>/<version>` (docs/data.md lists the versions).
+pub(crate) fn write_versioned_report<C: Serialize, R: Serialize>(
+    target: &Path,
+    command: &str,
+    version: u32,
+    seed: u64,
+    config: &C,
+    results: &R,
+) -> anyhow::Result<()> {
     let report = Report {
-        schema: format!("graspmap.{command}/1"),
+        schema: format!("graspmap.{command}/{version}"),
         version: env!("CARGO_PKG_VERSION"),
         git_commit: env!("GRASPMAP_GIT_COMMIT"),
         seed,

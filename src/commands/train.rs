@@ -1,17 +1,20 @@
 //! `graspmap train`: fit the MiniUNet to the labels, with best/last checkpoints, per-epoch visualisations and exact resume.
 
+use std::ops::ControlFlow;
 use std::path::Path;
 use std::time::Instant;
 
 use anyhow::{bail, Context as _};
 use tch::nn;
 
+use super::interrupt::{self, Interrupted};
 use super::report::write_report;
 use super::Context;
 use crate::data::atomic::{save_image_atomic, write_atomic};
 use crate::data::augment::AugmentConfig;
 use crate::data::dataset::{load_dataset, split_train_validation, training_sample, LabelledImage};
 use crate::data::labels::LabelStore;
+use crate::data::lock::StoreLock;
 use crate::grasp::IMAGE_SIZE;
 use crate::model::train::{
     load_weights, predict_map, read_checkpoint, save_checkpoint, train_epoch, validate, Adam,
@@ -66,6 +69,7 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
         );
     }
     let out_dir = context.data.join("affordance");
+    let _writer = StoreLock::acquire(&out_dir, "train")?;
     let mut run = start(&config, &out_dir, images.len(), options.resume)?;
     if run.meta.epoch >= config.epochs {
         context.say(&format!(
@@ -78,7 +82,17 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
     let augment = AugmentConfig::default();
     let bar = context.progress_bar("epochs", config.epochs as u64, run.meta.epoch as u64);
     while run.meta.epoch < config.epochs {
-        let improved = run.epoch(&images, &config, &augment, &out_dir, &bar)?;
+        let Some(improved) = run.epoch(&images, &config, &augment, &out_dir, &bar)? else {
+            bar.finish_and_clear();
+            let interrupted = interrupt::requested().unwrap_or(Interrupted { signal: 2 });
+            context.say(&format!(
+                "{interrupted}: epoch {} was abandoned; {} holds epoch {} complete; rerun with --resume to continue exactly",
+                run.meta.epoch + 1,
+                out_dir.join("last.safetensors").display(),
+                run.meta.epoch
+            ));
+            return Err(interrupted.into());
+        };
         bar.inc(1);
         let record = run.meta.history.last().copied();
         bar.suspend(|| {
@@ -204,7 +218,9 @@ fn start(
 
 impl Run {
     /// Trains and validates one epoch, then saves best.* (when validation improved), last.*,
-    /// the loss table and curve, and the epoch's visualisation. Returns whether it improved.
+    /// the loss table and curve, and the epoch's visualisation. Returns whether it improved, or
+    /// `None` when a signal asked to stop mid-epoch: nothing of it is saved, so the files on disk
+    /// still hold the last complete epoch.
     fn epoch(
         &mut self,
         images: &[LabelledImage],
@@ -212,7 +228,7 @@ impl Run {
         augment: &AugmentConfig,
         out_dir: &Path,
         bar: &indicatif::ProgressBar,
-    ) -> anyhow::Result<bool> {
+    ) -> anyhow::Result<Option<bool>> {
         let meta = &mut self.meta;
         let epoch = meta.epoch + 1;
         let epoch_start = Instant::now();
@@ -231,9 +247,16 @@ impl Run {
                 bar.set_message(format!(
                     "epoch {epoch} batch {}/{batches} loss {loss:.5}",
                     b + 1
-                ))
+                ));
+                match interrupt::requested() {
+                    Some(_) => ControlFlow::Break(()),
+                    None => ControlFlow::Continue(()),
+                }
             },
         );
+        let Some(train_loss) = train_loss else {
+            return Ok(None);
+        };
         let val_loss = validate(
             &self.net,
             Subset {
@@ -266,7 +289,7 @@ impl Run {
             let vis_dir = out_dir.join("training_vis");
             save_training_vis(&self.net, &images[first], &vis_dir, epoch, config.precision)?;
         }
-        Ok(improved)
+        Ok(Some(improved))
     }
 }
 

@@ -1,12 +1,39 @@
 //! Atomic file writes: a temporary file beside the target, synced, then renamed over it, so a
 //! killed process leaves either the old file or the new one, never a torn one.
 //!
-//! Every file the tool writes goes through [`write_atomic`].
+//! Every file the tool writes goes through [`write_atomic`]. For the full-disk tests, the
+//! environment variable `GRASPMAP_TEST_FAIL_WRITE=N` makes the process's N-th write fail with
+//! ENOSPC (`N:eio` for EIO), as a full or failing disk would.
 
 use std::io::Write;
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::OnceLock;
 
 use anyhow::Context;
+
+/// The injected write failure, if the environment asks for one: (write number, errno).
+fn fault_plan() -> Option<(u64, i32)> {
+    static PLAN: OnceLock<Option<(u64, i32)>> = OnceLock::new();
+    *PLAN.get_or_init(|| {
+        let spec = std::env::var("GRASPMAP_TEST_FAIL_WRITE").ok()?;
+        let (n, kind) = spec.split_once(':').unwrap_or((&spec, "enospc"));
+        let errno = if kind.eq_ignore_ascii_case("eio") {
+            libc::EIO
+        } else {
+            libc::ENOSPC
+        };
+        Some((n.trim().parse().ok()?, errno))
+    })
+}
+
+/// The error this write must fail with under fault injection.
+fn injected_fault() -> Option<std::io::Error> {
+    static WRITES: AtomicU64 = AtomicU64::new(0);
+    let (at, errno) = fault_plan()?;
+    let n = WRITES.fetch_add(1, Ordering::SeqCst) + 1;
+    (n == at).then(|| std::io::Error::from_raw_os_error(errno))
+}
 
 /// Writes `bytes` to `path` atomically: a killed process leaves either the old file or the new one.
 pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
@@ -25,10 +52,12 @@ pub(crate) fn write_atomic(path: &Path, bytes: &[u8]) -> anyhow::Result<()> {
     ));
     let result = (|| {
         let mut file =
-            std::fs::File::create(&tmp).with_context(|| format!("creating {}", tmp.display()))?;
-        file.write_all(bytes)
-            .and_then(|_| file.sync_all())
-            .with_context(|| format!("writing {}", tmp.display()))?;
+            std::fs::File::create(&tmp).with_context(|| format!("writing {}", path.display()))?;
+        match injected_fault() {
+            Some(fault) => Err(fault),
+            None => file.write_all(bytes).and_then(|_| file.sync_all()),
+        }
+        .with_context(|| format!("writing {}", path.display()))?;
         std::fs::rename(&tmp, path).with_context(|| format!("replacing {}", path.display()))
     })();
     if result.is_err() {

@@ -105,6 +105,14 @@ impl Labels {
     }
 
     /// Appends a label for `object`; returns its 1-based index k.
+    /// Takes the last label of `object` away again (undoing a [`Labels::push`]).
+    pub(crate) fn pop(&mut self, object: &str) {
+        if let Some((_, list)) = self.entries.iter_mut().find(|(name, _)| name == object) {
+            list.pop();
+        }
+        self.entries.retain(|(_, list)| !list.is_empty());
+    }
+
     pub(crate) fn push(&mut self, object: &str, label: Label) -> usize {
         match self.entries.iter_mut().find(|(name, _)| name == object) {
             Some((_, labels)) => {
@@ -252,9 +260,16 @@ impl LabelStore {
         image: &image::RgbImage,
     ) -> anyhow::Result<usize> {
         let k = labels.of(object).len() + 1;
-        save_image_atomic(image, &self.image_path(object, k))?;
+        let image_path = self.image_path(object, k);
+        save_image_atomic(image, &image_path)?;
         labels.push(object, label);
-        write_atomic(&self.labels_path(), labels.to_json().as_bytes())?;
+        if let Err(e) = write_atomic(&self.labels_path(), labels.to_json().as_bytes()) {
+            // labels.json still lists k - 1 images: take the k-th away again, so that the
+            // dataset on disk is exactly the one before this append (`--check` passes).
+            let _ = std::fs::remove_file(&image_path);
+            labels.pop(object);
+            return Err(e);
+        }
         Ok(k)
     }
 
@@ -383,6 +398,16 @@ pub(crate) struct ObjectProgress {
 }
 
 impl Progress {
+    /// Parses progress.json; `path` names it in errors.
+    pub(crate) fn parse(text: &str, path: &Path) -> anyhow::Result<Self> {
+        serde_json::from_str(text).with_context(|| {
+            format!(
+                "{} is corrupt (delete it or rerun with --force)",
+                path.display()
+            )
+        })
+    }
+
     /// The schema name.
     pub(crate) const SCHEMA: &'static str = "graspmap.label-progress/1";
 
@@ -420,12 +445,7 @@ impl LabelStore {
     pub(crate) fn load_progress(&self) -> anyhow::Result<Option<Progress>> {
         let path = self.dir.join(PROGRESS_FILE);
         match std::fs::read_to_string(&path) {
-            Ok(text) => Ok(Some(serde_json::from_str(&text).with_context(|| {
-                format!(
-                    "{} is corrupt (delete it or rerun with --force)",
-                    path.display()
-                )
-            })?)),
+            Ok(text) => Ok(Some(Progress::parse(&text, &path)?)),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
             Err(e) => Err(e).with_context(|| format!("reading {}", path.display())),
         }

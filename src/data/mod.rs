@@ -9,3 +9,4 @@ pub(crate) mod atomic;
 pub mod augment;
 pub mod dataset;
 pub mod labels;
+pub mod lock;

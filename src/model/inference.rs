@@ -2,7 +2,7 @@
 
 use std::path::Path;
 
-use anyhow::{bail, Context};
+use anyhow::bail;
 use image::RgbImage;
 use tch::{nn, Device, Kind, Tensor};
 
@@ -28,18 +28,10 @@ impl AffordanceModel {
                 path.display()
             );
         }
-        let tensors = Tensor::read_safetensors(path)
-            .with_context(|| {
-                format!(
-                    "{} is not a readable safetensors checkpoint (retrain, or pass another --checkpoint)",
-                    path.display()
-                )
-            })?
-            .into_iter()
-            .collect();
+        let tensors = super::checkpoint::read(path)?.tensors;
         let mut weights = nn::VarStore::new(Device::Cpu);
         let net = MiniUNet::new(&weights.root());
-        crate::model::train::load_weights(&mut weights, &tensors, path)?;
+        super::train::load_weights(&mut weights, &tensors, path)?;
         Ok(Self {
             _weights: weights,
             net,

@@ -5,7 +5,8 @@
 //! everything needed to continue a run exactly where it stopped.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::ops::ControlFlow;
+use std::path::Path;
 
 use anyhow::{bail, Context};
 use rand::seq::SliceRandom;
@@ -15,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use tch::nn;
 use tch::{Device, Kind, Reduction, Tensor};
 
-use crate::data::atomic::write_atomic;
+use super::checkpoint;
 use crate::data::augment::AugmentConfig;
 use crate::data::dataset::{training_sample, LabelledImage, Sample};
 use crate::model::unet::{MiniUNet, Precision};
@@ -243,15 +244,7 @@ impl CheckpointMeta {
     pub const SCHEMA: &'static str = "graspmap.checkpoint/1";
 }
 
-/// Paths of a checkpoint pair.
-pub(crate) fn checkpoint_paths(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
-    (
-        dir.join(format!("{name}.safetensors")),
-        dir.join(format!("{name}.json")),
-    )
-}
-
-/// Writes weights (plus any extra tensors) and the sidecar, each through a temporary file.
+/// Writes weights (plus any extra tensors) with the training state inside, and its JSON copy.
 pub fn save_checkpoint(
     vs: &nn::VarStore,
     extra: &[(String, Tensor)],
@@ -259,51 +252,45 @@ pub fn save_checkpoint(
     dir: &Path,
     name: &str,
 ) -> anyhow::Result<()> {
-    let (weights, sidecar) = checkpoint_paths(dir, name);
-    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let mut named: Vec<(String, Tensor)> = vs
-        .variables()
-        .into_iter()
-        .map(|(n, t)| (n, t.contiguous()))
-        .collect();
-    named.extend(extra.iter().map(|(n, t)| (n.clone(), t.contiguous())));
-    named.sort_by(|a, b| a.0.cmp(&b.0));
-    let tmp = dir.join(format!(".{name}.safetensors.tmp-{}", std::process::id()));
-    Tensor::write_safetensors(&named, &tmp)
-        .with_context(|| format!("writing {}", tmp.display()))?;
-    std::fs::rename(&tmp, &weights).with_context(|| format!("replacing {}", weights.display()))?;
-    let mut text = serde_json::to_string_pretty(meta)?;
-    text.push('\n');
-    write_atomic(&sidecar, text.as_bytes())
+    let mut named: Vec<(String, Tensor)> = vs.variables().into_iter().collect();
+    named.extend(extra.iter().map(|(n, t)| (n.clone(), t.shallow_clone())));
+    checkpoint::write(named, meta, dir, name)
 }
 
-/// Reads a checkpoint's tensors and sidecar, with errors that name the file and the fix.
+/// Reads a checkpoint's tensors and training state, with errors that name the file and the
+/// fix. The state comes from inside the weights file; a checkpoint from before it was embedded
+/// falls back to its JSON sidecar.
 pub fn read_checkpoint(
     dir: &Path,
     name: &str,
 ) -> anyhow::Result<(BTreeMap<String, Tensor>, CheckpointMeta)> {
-    let (weights, sidecar) = checkpoint_paths(dir, name);
-    let text = std::fs::read_to_string(&sidecar).with_context(|| {
-        format!(
-            "reading {} (train first, or check --data)",
-            sidecar.display()
-        )
-    })?;
-    let meta: CheckpointMeta = serde_json::from_str(&text)
-        .with_context(|| format!("{} is corrupt (delete it and retrain)", sidecar.display()))?;
-    if meta.schema != CheckpointMeta::SCHEMA {
-        bail!(
-            "{} has schema '{}', expected '{}'",
-            sidecar.display(),
-            meta.schema,
-            CheckpointMeta::SCHEMA
-        );
-    }
-    let tensors = Tensor::read_safetensors(&weights)
-        .with_context(|| format!("{} is missing or corrupt (retrain)", weights.display()))?
-        .into_iter()
-        .collect();
-    Ok((tensors, meta))
+    let (weights, sidecar) = checkpoint::checkpoint_paths(dir, name);
+    let decoded = checkpoint::read(&weights)?;
+    let sidecar_meta = || -> anyhow::Result<CheckpointMeta> {
+        let text = std::fs::read_to_string(&sidecar)
+            .with_context(|| format!("reading {}", sidecar.display()))?;
+        checkpoint::parse_meta(&text, &sidecar)
+    };
+    let meta = match decoded.meta {
+        Some(mut meta) => {
+            // The wall times live in the JSON copy only; take them when it is this epoch's.
+            if let Ok(copy) = sidecar_meta() {
+                if copy.epoch == meta.epoch && copy.history.len() == meta.history.len() {
+                    for (record, timed) in meta.history.iter_mut().zip(&copy.history) {
+                        record.seconds = timed.seconds;
+                    }
+                }
+            }
+            meta
+        }
+        None => sidecar_meta().with_context(|| {
+            format!(
+                "{} holds no training state; train from scratch",
+                weights.display()
+            )
+        })?,
+    };
+    Ok((decoded.tensors, meta))
 }
 
 /// Copies the model's weights out of a checkpoint's tensors.
@@ -374,7 +361,8 @@ pub(crate) struct Subset<'a> {
     pub(crate) indices: &'a [usize],
 }
 
-/// Trains one epoch; returns the mean training loss.
+/// Trains one epoch; returns the mean training loss, or `None` when `on_batch` breaks off
+/// (the epoch is then abandoned half-way and must not be saved).
 pub(crate) fn train_epoch(
     net: &MiniUNet,
     adam: &mut Adam,
@@ -382,8 +370,8 @@ pub(crate) fn train_epoch(
     config: &TrainConfig,
     epoch: u32,
     augment: &AugmentConfig,
-    mut on_batch: impl FnMut(usize, f64),
-) -> f64 {
+    mut on_batch: impl FnMut(usize, f64) -> ControlFlow<()>,
+) -> Option<f64> {
     let mut rng = epoch_rng(config.seed, epoch);
     let mut order = data.indices.to_vec();
     order.shuffle(&mut rng);
@@ -406,9 +394,11 @@ pub(crate) fn train_epoch(
         let value = l.double_value(&[]);
         total += value * chunk.len() as f64;
         count += chunk.len();
-        on_batch(b, value);
+        if on_batch(b, value).is_break() {
+            return None;
+        }
     }
-    total / count.max(1) as f64
+    Some(total / count.max(1) as f64)
 }
 
 /// Mean validation loss over unaugmented samples.

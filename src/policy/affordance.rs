@@ -144,7 +144,7 @@ impl AffordanceMaps {
 }
 
 /// A chosen action.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Choice {
     /// Angle bin (the map it came from).
     pub(crate) bin: usize,

@@ -3,6 +3,7 @@
 //! Everything here uses rapier's own math types (glam, f32); the closed-form IK in
 //! `kinematics` works in nalgebra f64 and is converted at its call sites in `pick`.
 
+mod invariants;
 pub(crate) mod kinematics;
 pub mod pick;
 pub(crate) mod robot;
@@ -84,7 +85,7 @@ pub(crate) struct SceneObject {
 }
 
 /// Where an object ended up: resting inside a tote's inner volume, or lost.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ObjectLocation {
     /// Resting inside bin 1.
@@ -106,6 +107,8 @@ pub struct Workcell {
     steps: u64,
     recorder: Option<Recorder>,
     camera: Camera,
+    /// The invariant violations seen so far, when watching for them.
+    violations: Option<Vec<String>>,
 }
 
 /// Renders an extra view every few steps while the arm moves (for `--record`), on a thread of
@@ -143,6 +146,7 @@ impl Workcell {
             steps: 0,
             recorder: None,
             camera: Camera::top_down(),
+            violations: None,
         })
     }
 
@@ -204,10 +208,13 @@ impl Workcell {
     pub(crate) fn step(&mut self) {
         self.world.step();
         self.steps += 1;
+        if self.violations.is_some() {
+            self.check_invariants();
+        }
         let due = self
             .recorder
             .as_ref()
-            .is_some_and(|r| self.steps % r.every == 0);
+            .is_some_and(|r| self.steps.is_multiple_of(r.every));
         if due {
             let scene = self.drawables();
             if let Some(r) = &self.recorder {

@@ -91,7 +91,7 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
     assert!(stdout.contains("95 % CI"), "{stdout}");
 
     let report = read_json(&json);
-    assert_eq!(report["schema"], "graspmap.eval/1");
+    assert_eq!(report["schema"], "graspmap.eval/2");
     assert!(report["git_commit"].is_string());
     assert_eq!(report["config"]["seeds"], serde_json::json!([0]));
     assert_eq!(report["config"]["suppression"]["remember"], 0);
@@ -304,4 +304,97 @@ fn record_writes_the_episode_beside_the_camera_view() {
         "eval", "--task", "test", "--seeds", "1-2", "--record", "x.gif",
     ]);
     assert_user_error(&out, &["--record", "--seeds"]);
+}
+
+/// The attempts of a report without their timings: what must not change on resume.
+fn attempts_of(report: &Value) -> Vec<Value> {
+    report["results"]["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|run| run["attempts"].as_array().unwrap().clone())
+        .map(|mut a| {
+            a.as_object_mut().unwrap().remove("timing");
+            a
+        })
+        .collect()
+}
+
+#[test]
+fn ctrl_c_keeps_the_finished_scenes_and_resume_equals_an_uninterrupted_sweep() {
+    use std::io::BufRead;
+    let setup = Setup::new();
+    let sweep = |json: &Path| -> Vec<String> {
+        [
+            "--data",
+            setup.dir.path().to_str().unwrap(),
+            "--split",
+            setup.path("split.json").to_str().unwrap(),
+            "--json",
+            json.to_str().unwrap(),
+            "eval",
+            "--task",
+            "empty_bin",
+            "--policy",
+            "random",
+            "--seeds",
+            "1-5",
+            "--max-attempts",
+            "2",
+        ]
+        .map(str::to_owned)
+        .to_vec()
+    };
+    let whole = setup.path("whole.json");
+    assert_ok(&graspmap(
+        &sweep(&whole).iter().map(String::as_str).collect::<Vec<_>>(),
+    ));
+
+    let report = setup.path("sweep.json");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_graspmap"))
+        .args(sweep(&report))
+        .env_remove("GRASPMAP_LOG")
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // The first scene is done when it says how many objects it left.
+    let mut lines = std::io::BufReader::new(child.stdout.take().unwrap()).lines();
+    for line in lines.by_ref() {
+        if line.unwrap().ends_with("objects left in the bin.") {
+            break;
+        }
+    }
+    // SAFETY: kill only sends a signal to the given PID.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    let said: Vec<String> = lines.map(Result::unwrap).collect();
+    assert_eq!(child.wait().unwrap().code(), Some(130), "{said:?}");
+    assert!(
+        said.iter().any(|l| l.contains("rerun with --resume")),
+        "{said:?}"
+    );
+    let partial: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    assert_eq!(partial["schema"], "graspmap.eval/2");
+    assert_eq!(partial["results"]["interrupted"], true);
+    let kept = partial["results"]["runs"].as_array().unwrap().len();
+    assert!((1..5).contains(&kept), "{kept} scenes kept");
+
+    let mut resume = sweep(&report);
+    resume.push("--resume".into());
+    assert_ok(&graspmap(
+        &resume.iter().map(String::as_str).collect::<Vec<_>>(),
+    ));
+    let resumed: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();
+    let uninterrupted: Value =
+        serde_json::from_str(&std::fs::read_to_string(&whole).unwrap()).unwrap();
+    assert_eq!(resumed["results"]["interrupted"], false);
+    assert_eq!(attempts_of(&resumed), attempts_of(&uninterrupted));
+    assert_eq!(
+        resumed["results"]["success"],
+        uninterrupted["results"]["success"]
+    );
+    assert_eq!(
+        resumed["results"]["moved"],
+        uninterrupted["results"]["moved"]
+    );
 }

@@ -54,11 +54,13 @@ impl Workspace {
         self.command(args).output().unwrap()
     }
 
-    /// Every file of the labels dir, by name, with its bytes.
+    /// Every file of the labels dir but the writer's lock (it holds a PID), by name, with its
+    /// bytes.
     fn snapshot(&self) -> Vec<(String, Vec<u8>)> {
         let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(self.labels())
             .unwrap()
             .flatten()
+            .filter(|e| e.file_name() != ".lock")
             .map(|e| {
                 (
                     e.file_name().to_string_lossy().into_owned(),
@@ -340,4 +342,112 @@ fn interactive_clicks_come_from_stdin() {
     assert_eq!(got.of("YcbTennisBall"), &[label]);
     let preview_image = image::open(&preview).unwrap();
     assert_eq!((preview_image.width(), preview_image.height()), (512, 512));
+}
+
+/// Sends `signal` to a child process.
+fn signal(child: &std::process::Child, signal: i32) {
+    // SAFETY: kill only sends a signal to the given PID.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
+}
+
+/// Waits until `path` exists (a child has reached some point), at most 60 s.
+fn wait_for(path: &Path) {
+    let start = std::time::Instant::now();
+    while !path.exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "{} never appeared",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn a_second_labeller_is_refused_at_once_and_a_killed_ones_lock_never_blocks() {
+    let ws = Workspace::new();
+    // A person labelling interactively holds the store while the prompt waits.
+    let mut person = ws
+        .command(&["--interactive"])
+        .stdin(Stdio::piped())
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
+    wait_for(&ws.labels().join("preview.png"));
+    let start = std::time::Instant::now();
+    let out = ws.run(&["--per-object", "1"]);
+    assert!(
+        start.elapsed() < Duration::from_secs(10),
+        "the second writer waited"
+    );
+    assert_user_error(&out, ".lock");
+    assert_user_error(&out, &format!("process {}", person.id()));
+    // Killed with SIGKILL, the holder cannot clean up; its lock goes with it all the same.
+    person.kill().unwrap();
+    person.wait().unwrap();
+    assert_ok(&ws.run(&["--per-object", "1"]));
+}
+
+#[test]
+fn ctrl_c_stops_after_the_current_round_and_the_rerun_finishes_the_same_dataset() {
+    let reference = Workspace::new();
+    assert_ok(&reference.run(&["--per-object", "5"]));
+    let ws = Workspace::new();
+    let child = ws
+        .command(&["--per-object", "5", "--threads", "1"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    wait_for(&ws.labels().join("labels.json"));
+    signal(&child, libc::SIGINT);
+    let out = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(130), "stdout: {stdout}");
+    assert!(stdout.contains("interrupted by SIGINT"), "{stdout}");
+    assert!(stdout.contains("rerun the same command"), "{stdout}");
+    assert_ok(&ws.run(&["--check"]));
+    assert_ok(&ws.run(&["--per-object", "5"]));
+    assert_eq!(ws.snapshot(), reference.snapshot());
+}
+
+#[test]
+fn a_full_disk_at_any_write_of_a_round_fails_clearly_and_the_rerun_resumes() {
+    let reference = Workspace::new();
+    assert_ok(&reference.run(&["--per-object", "1", "--threads", "1"]));
+    let expected = reference.snapshot();
+    // One successful round writes the image, labels.json and progress.json; failed rounds write
+    // progress.json. Fail each of the first writes in turn.
+    for n in 1..=7 {
+        let ws = Workspace::new();
+        let out = ws
+            .command(&["--per-object", "1", "--threads", "1"])
+            .env("GRASPMAP_TEST_FAIL_WRITE", n.to_string())
+            .output()
+            .unwrap();
+        if out.status.success() {
+            // Fewer writes than n: the whole run fit before the fault.
+            assert_eq!(ws.snapshot(), expected, "write {n}");
+            continue;
+        }
+        assert_user_error(&out, "No space left on device");
+        assert_user_error(&out, "labels");
+        if ws.labels().join("labels.json").exists() {
+            assert_ok(&ws.run(&["--check"]));
+        }
+        assert_ok(&ws.run(&["--per-object", "1", "--threads", "1"]));
+        let differing: Vec<String> = ws
+            .snapshot()
+            .into_iter()
+            .zip(&expected)
+            .filter(|(a, b)| a != *b)
+            .map(|(a, _)| format!("{}: {}", a.0, String::from_utf8_lossy(&a.1)))
+            .collect();
+        assert!(
+            differing.is_empty(),
+            "after a full disk at write {n}: {differing:?}"
+        );
+        assert_eq!(ws.snapshot(), expected, "after a full disk at write {n}");
+    }
 }

@@ -198,20 +198,19 @@ fn missing_or_bad_inputs_are_clear_errors() {
     let data = data_dir();
     assert_user_error(
         &train(data.path(), &["--epochs", "1", "--resume"]),
-        "last.json",
+        "last.safetensors",
     );
 
     assert_ok(&train(data.path(), &["--epochs", "1"]));
+    // The JSON beside a checkpoint is a copy for people: a torn one does not stop a resume,
+    // since the training state travels inside the weights file.
+    std::fs::write(data.path().join("affordance/last.json"), b"{ half").unwrap();
+    assert_ok(&train(data.path(), &["--epochs", "2", "--resume"]));
     let last = data.path().join("affordance/last.safetensors");
     std::fs::write(&last, b"not a tensor file").unwrap();
     assert_user_error(
-        &train(data.path(), &["--epochs", "2", "--resume"]),
+        &train(data.path(), &["--epochs", "3", "--resume"]),
         "last.safetensors",
-    );
-    std::fs::write(data.path().join("affordance/last.json"), b"{ half").unwrap();
-    assert_user_error(
-        &train(data.path(), &["--epochs", "2", "--resume"]),
-        "last.json",
     );
 
     let image = data.path().join("labels/YcbHammer_1_rgb.png");
@@ -254,4 +253,103 @@ fn bench_reports_rust_timings_without_the_peer() {
     assert!(rust["infer_8_rotations_ms"].as_f64().unwrap() > 0.0);
     assert_eq!(rust["steps"], 2);
     assert!(report["results"]["python"].is_null());
+}
+
+fn train_command(data: &Path, args: &[&str]) -> Command {
+    let mut command = Command::new(BIN);
+    command
+        .arg("--data")
+        .arg(data)
+        .args([
+            "--threads",
+            "2",
+            "train",
+            "--batch-size",
+            "2",
+            "--precision",
+            "fp32",
+        ])
+        .args(args)
+        .env_remove("GRASPMAP_LOG");
+    command
+}
+
+#[test]
+fn a_second_trainer_is_refused_while_the_first_holds_the_store() {
+    let data = data_dir();
+    let affordance = data.path().join("affordance");
+    std::fs::create_dir_all(&affordance).unwrap();
+    // This test's own process plays the first trainer.
+    let lock = std::fs::File::create(affordance.join(".lock")).unwrap();
+    lock.try_lock().unwrap();
+    std::fs::write(
+        affordance.join(".lock"),
+        format!("{}\n", std::process::id()),
+    )
+    .unwrap();
+    let out = train(data.path(), &["--epochs", "1"]);
+    assert_user_error(&out, ".lock");
+    assert_user_error(&out, &format!("process {}", std::process::id()));
+    assert!(!affordance.join("last.safetensors").exists());
+    drop(lock);
+    assert_ok(&train(data.path(), &["--epochs", "1"]));
+}
+
+#[test]
+fn sigterm_abandons_the_epoch_in_progress_and_resume_stays_exact() {
+    let reference = data_dir();
+    assert_ok(&train(reference.path(), &["--epochs", "4"]));
+    let data = data_dir();
+    let child = train_command(data.path(), &["--epochs", "40"])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    let last = data.path().join("affordance/last.json");
+    let start = std::time::Instant::now();
+    while !last.exists() {
+        assert!(start.elapsed().as_secs() < 60, "no epoch finished");
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    // SAFETY: kill only sends a signal to the given PID.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGTERM) }, 0);
+    let out = child.wait_with_output().unwrap();
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(out.status.code(), Some(143), "{stdout}");
+    assert!(stdout.contains("interrupted by SIGTERM"), "{stdout}");
+    assert!(stdout.contains("--resume"), "{stdout}");
+    let kept = history(data.path(), "last").epoch;
+    assert!((1..40).contains(&kept), "kept epoch {kept}");
+    if kept < 4 {
+        assert_ok(&train(data.path(), &["--epochs", "4", "--resume"]));
+        let weights = |d: &Path| std::fs::read(d.join("affordance/last.safetensors")).unwrap();
+        assert_eq!(weights(data.path()), weights(reference.path()));
+    }
+}
+
+#[test]
+fn a_full_disk_at_any_write_of_an_epoch_fails_clearly_and_leaves_a_resumable_run() {
+    let reference = data_dir();
+    assert_ok(&train(reference.path(), &["--epochs", "1"]));
+    let weights = |d: &Path| std::fs::read(d.join("affordance/last.safetensors")).unwrap();
+    // An epoch writes best.*, last.*, losses.csv, losses.png and training_vis/001.png.
+    for n in 1..=7 {
+        let data = data_dir();
+        let out = train_command(data.path(), &["--epochs", "1"])
+            .env("GRASPMAP_TEST_FAIL_WRITE", format!("{n}:eio"))
+            .output()
+            .unwrap();
+        assert_user_error(&out, "Input/output error");
+        assert_user_error(&out, "affordance");
+        let affordance = data.path().join("affordance");
+        let resume = if affordance.join("last.safetensors").exists() {
+            // What is there is whole: it reads back.
+            read_checkpoint(&affordance, "last").unwrap();
+            vec!["--epochs", "1", "--resume"]
+        } else {
+            vec!["--epochs", "1"]
+        };
+        assert_ok(&train(data.path(), &resume));
+        assert_eq!(weights(data.path()), weights(reference.path()), "write {n}");
+    }
 }

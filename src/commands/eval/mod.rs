@@ -4,13 +4,14 @@
 mod results;
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::Context as _;
+use anyhow::{bail, Context as _};
 use image::RgbImage;
 
-use super::report::write_report;
+use super::interrupt;
+use super::report::write_versioned_report;
 use super::video::save_gif_atomic;
 use super::Context;
 use crate::assets::objects::ObjectModel;
@@ -19,7 +20,7 @@ use crate::grasp::draw::draw_grasp;
 use crate::grasp::world_grasp;
 use crate::model::inference::AffordanceModel;
 use crate::model::unet::Precision;
-use crate::named::named_enum;
+use crate::named::{named_enum, Named};
 use crate::policy::affordance::{Suppression, SuppressionConfig};
 use crate::policy::baselines::{OraclePolicy, RandomPolicy};
 use crate::policy::model::{ModelPolicy, ModelPolicyConfig};
@@ -95,6 +96,10 @@ pub(crate) struct EvalConfig {
     pub(crate) max_attempts: u32,
     /// Where to write the episode video (one seed only).
     pub(crate) record: Option<PathBuf>,
+    /// Skip the scenes that the `--json` report already holds.
+    pub(crate) resume: bool,
+    /// Check the physics invariants after every step (the soak test).
+    pub(crate) check_invariants: bool,
 }
 
 /// Settings shared by every scene of one evaluation.
@@ -109,6 +114,7 @@ struct Evaluation<'a> {
     max_attempts: u32,
     recording: Option<Vec<RgbImage>>,
     bar: indicatif::ProgressBar,
+    check_invariants: bool,
 }
 
 /// Runs the command.
@@ -116,14 +122,7 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
     let start = Instant::now();
     let seeds = config.seeds.clone();
     crate::model::use_threads(context.threads);
-    let policy: Box<dyn Policy> = match config.policy {
-        PolicyKind::Model => Box::new(ModelPolicy::new(
-            AffordanceModel::load(&config.checkpoint, config.precision)?,
-            config.model,
-        )?),
-        PolicyKind::Random => Box::new(RandomPolicy),
-        PolicyKind::Oracle => Box::new(OraclePolicy),
-    };
+    let policy = policy(&config)?;
     let split = context.split()?;
     let names: Vec<String> = match config.task {
         Task::Train => split.train.clone(),
@@ -150,17 +149,45 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         max_attempts: config.max_attempts,
         recording: config.record.as_ref().map(|_| Vec::new()),
         bar: context.progress_bar("attempts", per_scene * seeds.len() as u64, 0),
+        check_invariants: config.check_invariants,
     };
 
-    let mut runs = Vec::new();
+    let mut runs = match (&context.json, config.resume) {
+        (Some(report), true) => finished_runs(report, &config)?,
+        _ => Vec::new(),
+    };
+    evaluation.bar.inc(per_scene * runs.len() as u64);
+    let mut interrupted = None;
     for &seed in &seeds {
+        if runs.iter().any(|r| r.seed == seed) {
+            continue;
+        }
         let run = match config.task {
             Task::EmptyBin => evaluation.empty_bin(&models, seed)?,
             Task::Train | Task::Test => evaluation.single_objects(&models, seed)?,
         };
-        runs.push(run);
+        match run {
+            Some(run) => runs.push(run),
+            None => {
+                interrupted = interrupt::requested();
+                break;
+            }
+        }
     }
+    // Resumed runs come first; a report lists its scenes in the order of --seeds.
+    runs.sort_by_key(|r| seeds.iter().position(|&s| s == r.seed));
     evaluation.bar.finish_and_clear();
+    if let Some(interrupted) = interrupted {
+        let elapsed = start.elapsed().as_secs_f64();
+        return Err(keep_interrupted(
+            context,
+            &config,
+            &names,
+            runs,
+            elapsed,
+            interrupted,
+        ));
+    }
     if let (Some(path), Some(frames)) = (&config.record, &evaluation.recording) {
         save_gif_atomic(frames, EPISODE_DELAY_CS, path)
             .with_context(|| format!("writing --record {}", path.display()))?;
@@ -174,20 +201,116 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         &names,
         runs,
         start.elapsed().as_secs_f64(),
+        false,
     );
     for line in report_lines(&results, config.suppression.remember) {
         context.say(&line);
     }
     if let Some(json) = &context.json {
-        write_report(
+        write_versioned_report(
             json,
             "eval",
+            2,
             seeds[0],
             &resolved_config(context, &config, &names),
             &results,
         )?;
     }
     Ok(())
+}
+
+/// Writes the report of an interrupted sweep (the scenes finished so far) and says how to
+/// continue; returns the error that ends the command with the signal's status.
+fn keep_interrupted(
+    context: &Context,
+    config: &EvalConfig,
+    names: &[String],
+    runs: Vec<SceneRun>,
+    elapsed: f64,
+    interrupted: interrupt::Interrupted,
+) -> anyhow::Error {
+    let seeds = &config.seeds;
+    let written = (|| -> anyhow::Result<()> {
+        let kept = format!("{} of {} scenes", runs.len(), seeds.len());
+        let results = summarise(
+            config.task,
+            config.policy,
+            seeds.clone(),
+            names,
+            runs,
+            elapsed,
+            true,
+        );
+        match &context.json {
+            Some(json) if json != Path::new("-") => {
+                let resolved = resolved_config(context, config, names);
+                write_versioned_report(json, "eval", 2, seeds[0], &resolved, &results)?;
+                context.say(&format!(
+                    "{interrupted}: {kept} kept in {}; rerun with --resume to finish the rest",
+                    json.display()
+                ));
+            }
+            _ => context.say(&format!(
+                "{interrupted}: {kept} finished; pass --json REPORT.json to keep them and --resume to continue"
+            )),
+        }
+        Ok(())
+    })();
+    match written {
+        Ok(()) => interrupted.into(),
+        Err(e) => e,
+    }
+}
+
+/// The policy that chooses the grasps, with its model loaded when it needs one.
+fn policy(config: &EvalConfig) -> anyhow::Result<Box<dyn Policy>> {
+    Ok(match config.policy {
+        PolicyKind::Model => Box::new(ModelPolicy::new(
+            AffordanceModel::load(&config.checkpoint, config.precision)?,
+            config.model,
+        )?),
+        PolicyKind::Random => Box::new(RandomPolicy),
+        PolicyKind::Oracle => Box::new(OraclePolicy),
+    })
+}
+
+/// The scenes that an earlier report of the same evaluation holds, for `--resume`: those of
+/// this run's seeds, checked to come from the same task, policy and settings.
+fn finished_runs(report: &Path, config: &EvalConfig) -> anyhow::Result<Vec<SceneRun>> {
+    if !report.is_file() {
+        return Ok(Vec::new());
+    }
+    let text = std::fs::read_to_string(report)
+        .with_context(|| format!("reading the report to resume, {}", report.display()))?;
+    let bad = || {
+        format!(
+            "{} is not a graspmap eval report to resume from (delete it, or drop --resume)",
+            report.display()
+        )
+    };
+    let value: serde_json::Value = serde_json::from_str(&text).with_context(bad)?;
+    let schema = value["schema"].as_str().unwrap_or_default();
+    if !matches!(schema, "graspmap.eval/1" | "graspmap.eval/2") {
+        bail!("{}: schema '{schema}'", bad());
+    }
+    for (key, now) in [
+        ("task", config.task.name()),
+        ("policy", config.policy.name()),
+    ] {
+        let then = value["config"][key].as_str().unwrap_or_default();
+        if then != now {
+            bail!(
+                "{} ran --{key} {then}, this run --{key} {now}; resume with the same settings",
+                report.display()
+            );
+        }
+    }
+    let runs: Vec<SceneRun> =
+        serde_json::from_value(value["results"]["runs"].clone()).with_context(bad)?;
+    Ok(runs
+        .into_iter()
+        .filter(|r| config.seeds.contains(&r.seed))
+        .collect())
 }
 
 /// The configuration as the report records it.
@@ -214,13 +337,17 @@ fn resolved_config(context: &Context, config: &EvalConfig, names: &[String]) -> 
 
 impl Evaluation<'_> {
     /// train/test: each object alone, [`ATTEMPTS_PER_OBJECT`] fresh drops each.
-    fn single_objects(&mut self, models: &[ObjectModel], seed: u64) -> anyhow::Result<SceneRun> {
+    fn single_objects(
+        &mut self,
+        models: &[ObjectModel],
+        seed: u64,
+    ) -> anyhow::Result<Option<SceneRun>> {
         let mut attempts = Vec::new();
         for (i, model) in models.iter().enumerate() {
             for a in 0..ATTEMPTS_PER_OBJECT {
                 let started = Instant::now();
                 let drop_seed = seed + 100 * i as u64 + u64::from(a) + SINGLE_OBJECT_SEED_OFFSET;
-                let mut cell = Workcell::new(&self.workcell)?;
+                let mut cell = self.workcell()?;
                 cell.drop_objects(std::slice::from_ref(model), drop_seed)?;
                 let drop_seconds = started.elapsed().as_secs_f64();
                 // Suppression remembers actions within a scene; each attempt here is a new one.
@@ -241,19 +368,22 @@ impl Evaluation<'_> {
                     }
                 ));
                 attempts.push(record);
+                if interrupt::requested().is_some() {
+                    return Ok(None);
+                }
             }
         }
-        Ok(SceneRun {
+        Ok(Some(SceneRun {
             seed,
             attempts,
             bin: None,
-        })
+        }))
     }
 
     /// empty_bin: every object in bin 1 at once, picked until the bin is empty or attempts run out.
-    fn empty_bin(&mut self, models: &[ObjectModel], seed: u64) -> anyhow::Result<SceneRun> {
+    fn empty_bin(&mut self, models: &[ObjectModel], seed: u64) -> anyhow::Result<Option<SceneRun>> {
         let started = Instant::now();
-        let mut cell = Workcell::new(&self.workcell)?;
+        let mut cell = self.workcell()?;
         cell.drop_objects(models, seed)?;
         let mut setup_seconds = started.elapsed().as_secs_f64();
         let total = models.len();
@@ -279,6 +409,9 @@ impl Evaluation<'_> {
             self.bar.suspend(|| self.context.say(&line));
             self.bar.inc(1);
             attempts.push(record);
+            if interrupt::requested().is_some() {
+                return Ok(None);
+            }
         }
         let left = count(&cell, ObjectLocation::Bin1);
         let line = format!("{left} objects left in the bin.");
@@ -289,7 +422,7 @@ impl Evaluation<'_> {
             .enumerate()
             .map(|(i, o)| (o.model.name.clone(), cell.locate(i)))
             .collect();
-        Ok(SceneRun {
+        Ok(Some(SceneRun {
             seed,
             attempts,
             bin: Some(BinOutcome {
@@ -298,7 +431,16 @@ impl Evaluation<'_> {
                 lost: count(&cell, ObjectLocation::Lost),
                 locations,
             }),
-        })
+        }))
+    }
+
+    /// A fresh workcell, watching its invariants when the soak asks for it.
+    fn workcell(&self) -> anyhow::Result<Workcell> {
+        let mut cell = Workcell::new(&self.workcell)?;
+        if self.check_invariants {
+            cell.watch_invariants();
+        }
+        Ok(cell)
     }
 
     /// Where a visualisation goes, for the policies that draw one.
@@ -373,7 +515,7 @@ impl Evaluation<'_> {
             let oblique = cell.take_recording();
             frames.extend(oblique.iter().map(|o| side_by_side(o, &view)));
         }
-        Ok(AttemptRecord {
+        let record = AttemptRecord {
             drop_seed,
             attempt,
             object: None,
@@ -386,13 +528,19 @@ impl Evaluation<'_> {
             held: outcome.object,
             moved: None,
             vis: vis_written,
+            violations: cell.take_violations(),
             timing: AttemptTiming {
                 wall: 0.0,
                 sim,
                 render,
                 network: decision.network_seconds,
             },
-        })
+        };
+        for violation in &record.violations {
+            let line = format!("invariant broken: seed {drop_seed} attempt {attempt}: {violation}");
+            self.bar.suspend(|| eprintln!("{line}"));
+        }
+        Ok(record)
     }
 }
 

@@ -13,7 +13,7 @@ use crate::sim::pick::PickReason;
 use crate::sim::ObjectLocation;
 
 /// Wall seconds of one attempt, by what they were spent on.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct AttemptTiming {
     /// Everything, from the drop (train/test) or the previous attempt (empty_bin) to the report.
     pub(crate) wall: f64,
@@ -26,7 +26,7 @@ pub(crate) struct AttemptTiming {
 }
 
 /// One pick attempt.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(crate) struct AttemptRecord {
     /// The scene's drop seed.
     pub(crate) drop_seed: u64,
@@ -55,10 +55,13 @@ pub(crate) struct AttemptRecord {
     pub(crate) vis: Option<PathBuf>,
     /// Where the time went.
     pub(crate) timing: AttemptTiming,
+    /// Physics invariants broken during the attempt (with `--check-invariants` only).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(crate) violations: Vec<String>,
 }
 
 /// empty_bin: where each object ended up.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(crate) struct BinOutcome {
     /// Objects resting in bin 2.
     pub(crate) moved: usize,
@@ -71,7 +74,7 @@ pub(crate) struct BinOutcome {
 }
 
 /// One scene seed's run.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(crate) struct SceneRun {
     /// The base seed.
     pub(crate) seed: u64,
@@ -104,6 +107,8 @@ pub(crate) struct EvalResults {
     pub(crate) runs: Vec<SceneRun>,
     /// Where the time went.
     pub(crate) timing: TimingSummary,
+    /// A signal stopped the run: `runs` holds the scenes finished before it (schema version 2).
+    pub(crate) interrupted: bool,
 }
 
 /// The report of a whole evaluation from its scenes.
@@ -114,6 +119,7 @@ pub(super) fn summarise(
     names: &[String],
     runs: Vec<SceneRun>,
     total_wall: f64,
+    interrupted: bool,
 ) -> EvalResults {
     let all: Vec<&AttemptRecord> = runs.iter().flat_map(|r| &r.attempts).collect();
     let successes = all.iter().filter(|a| a.success).count();
@@ -171,6 +177,7 @@ pub(super) fn summarise(
             total_wall,
         },
         runs,
+        interrupted,
     }
 }
 

@@ -118,7 +118,16 @@ pub(super) fn read_clicks(
 ) -> anyhow::Result<BTreeMap<String, Vec<Label>>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("reading --clicks {}", path.display()))?;
-    let value: serde_json::Value = serde_json::from_str(&text)
+    parse_clicks(&text, path, train)
+}
+
+/// Parses a clicks file's text; `path` names it in errors.
+pub(crate) fn parse_clicks(
+    text: &str,
+    path: &Path,
+    train: &[String],
+) -> anyhow::Result<BTreeMap<String, Vec<Label>>> {
+    let value: serde_json::Value = serde_json::from_str(text)
         .with_context(|| format!("--clicks {} is not valid JSON", path.display()))?;
     let list = value.as_array().with_context(|| {
         format!(

@@ -9,14 +9,18 @@ use std::time::Instant;
 
 use anyhow::bail;
 
+use super::interrupt;
 use super::report::write_report;
 use super::Context;
 use crate::assets::objects::ObjectModel;
 use crate::data::labels::{Label, LabelStore, Labels, Progress};
+use crate::data::lock::StoreLock;
 use crate::grasp::world_grasp;
 use crate::metrics::FailureTally;
 use crate::sim::pick::PickReason;
 use crate::sim::{Workcell, WorkcellConfig};
+#[cfg(test)]
+pub(crate) use clicks::parse_clicks;
 use clicks::{check_enough_clicks, read_clicks, Clicker};
 
 /// One `graspmap label` run, resolved by the CLI.
@@ -91,20 +95,10 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     if args.check {
         return check(context, &store, &context.objects.names());
     }
+    let _writer = StoreLock::acquire(store.dir(), "label")?;
     let split = context.split()?;
     let models = context.objects.load_all(&split.train)?;
-    let clicker = match &args.source {
-        ClickSource::File(path) => Clicker::File {
-            clicks: read_clicks(path, &split.train)?,
-        },
-        ClickSource::Interactive { preview } => Clicker::Interactive {
-            preview: preview.clone(),
-        },
-        ClickSource::Scripted => Clicker::Scripted {
-            noise_px: args.noise.px,
-            noise_deg: args.noise.deg,
-        },
-    };
+    let clicker = clicker(&args, &split.train)?;
 
     if args.force {
         store.clear()?;
@@ -119,6 +113,14 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     for object in &split.train {
         let (rounds, recorded) = progress.entry(object);
         progress.set_rounds(object, rounds, recorded);
+    }
+    // A run stopped between writing labels.json and progress.json left the round uncounted on
+    // disk; record the repaired count now, in case no later round writes it.
+    if store
+        .load_progress()?
+        .is_some_and(|on_disk| on_disk != progress)
+    {
+        store.save_progress(&progress)?;
     }
 
     let start = Instant::now();
@@ -149,13 +151,17 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     } else {
         usize::from(context.threads)
     };
-    let summaries = job.label_all(
-        &split.train,
-        &models,
-        &Mutex::new(Shared { labels, progress }),
-        workers,
-    )?;
+    let shared = Mutex::new(Shared { labels, progress });
+    let summaries = job.label_all(&split.train, &models, &shared, workers)?;
     bar.finish_and_clear();
+    if let Some(interrupted) = interrupt::requested() {
+        let kept = lock(&shared).labels.len();
+        context.say(&format!(
+            "{interrupted}: {kept} labels kept in {}, each verified and saved; rerun the same command to continue",
+            store.dir().display()
+        ));
+        return Err(interrupted.into());
+    }
 
     let results = LabelResults {
         labels_dir: store.dir().display().to_string(),
@@ -183,6 +189,22 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
         write_report(json, "label", args.seed, &resolved, &results)?;
     }
     Ok(())
+}
+
+/// Where this run's clicks come from, with a clicks file read and checked up front.
+fn clicker(args: &LabelConfig, train: &[String]) -> anyhow::Result<Clicker> {
+    Ok(match &args.source {
+        ClickSource::File(path) => Clicker::File {
+            clicks: read_clicks(path, train)?,
+        },
+        ClickSource::Interactive { preview } => Clicker::Interactive {
+            preview: preview.clone(),
+        },
+        ClickSource::Scripted => Clicker::Scripted {
+            noise_px: args.noise.px,
+            noise_deg: args.noise.deg,
+        },
+    })
 }
 
 /// Dataset state shared by the workers.
@@ -268,8 +290,9 @@ impl ObjectJob<'_> {
             )
         };
         while have < args.per_object as usize {
-            if self.stop.load(Ordering::SeqCst) {
-                // Another object failed; this one resumes on the next run.
+            if self.stop.load(Ordering::SeqCst) || interrupt::requested().is_some() {
+                // Another object failed, or a signal asked to stop: this one resumes on the
+                // next run, from the rounds saved so far.
                 break;
             }
             if round >= args.max_rounds {

@@ -1,0 +1,185 @@
+//! Checkpoint files: weights (and optimiser state) in safetensors, with the training state
+//! embedded in the file's metadata, so that one atomic rename replaces both together.
+//!
+//! The JSON sidecar beside each checkpoint (`best.json`, `last.json`) is a copy for people and
+//! tools to read; graspmap itself reads the state from the safetensors header, so a reader can
+//! never pair new weights with an old sidecar. Files are decoded from bytes in memory, which is
+//! also what the parsers' fuzz tests feed.
+
+use std::borrow::Cow;
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context};
+use safetensors::tensor::{Dtype, SafeTensors, View};
+use tch::{Kind, Tensor};
+
+use super::train::CheckpointMeta;
+use crate::data::atomic::write_atomic;
+
+/// The metadata key that holds the training state's JSON.
+pub const META_KEY: &str = "graspmap.checkpoint";
+
+/// Paths of a checkpoint's weights and its JSON copy.
+pub(crate) fn checkpoint_paths(dir: &Path, name: &str) -> (PathBuf, PathBuf) {
+    (
+        dir.join(format!("{name}.safetensors")),
+        dir.join(format!("{name}.json")),
+    )
+}
+
+/// A tensor as safetensors sees it: dtype, shape and little-endian bytes.
+struct Raw {
+    dtype: Dtype,
+    shape: Vec<usize>,
+    bytes: Vec<u8>,
+}
+
+impl Raw {
+    fn of(tensor: &Tensor) -> anyhow::Result<Self> {
+        let tensor = tensor.contiguous();
+        let dtype = match tensor.kind() {
+            Kind::Float => Dtype::F32,
+            Kind::Double => Dtype::F64,
+            Kind::Int64 => Dtype::I64,
+            Kind::BFloat16 => Dtype::BF16,
+            other => bail!("cannot save a {other:?} tensor"),
+        };
+        let numel = tensor.numel();
+        let mut bytes = vec![0u8; numel * tensor.kind().elt_size_in_bytes()];
+        tensor
+            .f_copy_data_u8(&mut bytes, numel)
+            .context("copying a tensor out of libtorch")?;
+        let shape = tensor.size().iter().map(|&d| d as usize).collect();
+        Ok(Self {
+            dtype,
+            shape,
+            bytes,
+        })
+    }
+}
+
+impl View for &Raw {
+    fn dtype(&self) -> Dtype {
+        self.dtype
+    }
+    fn shape(&self) -> &[usize] {
+        &self.shape
+    }
+    fn data(&self) -> Cow<'_, [u8]> {
+        Cow::Borrowed(&self.bytes)
+    }
+    fn data_len(&self) -> usize {
+        self.bytes.len()
+    }
+}
+
+/// The safetensors bytes of `tensors` with `meta` in the header.
+pub(crate) fn encode(
+    tensors: &[(String, Tensor)],
+    meta: &CheckpointMeta,
+) -> anyhow::Result<Vec<u8>> {
+    let mut meta = meta.clone();
+    for record in &mut meta.history {
+        record.seconds = 0.0;
+    }
+    let raw: Vec<(String, Raw)> = tensors
+        .iter()
+        .map(|(name, t)| Ok((name.clone(), Raw::of(t)?)))
+        .collect::<anyhow::Result<_>>()?;
+    let info = HashMap::from([(META_KEY.to_owned(), serde_json::to_string(&meta)?)]);
+    safetensors::tensor::serialize(raw.iter().map(|(n, r)| (n.as_str(), r)), &Some(info))
+        .context("encoding the checkpoint")
+}
+
+/// A checkpoint read from bytes: its tensors, and its training state when it has one (the
+/// files that `graspmap train` writes always do; weights from elsewhere may not).
+pub(crate) struct Decoded {
+    pub(crate) tensors: BTreeMap<String, Tensor>,
+    pub(crate) meta: Option<CheckpointMeta>,
+}
+
+/// Decodes safetensors bytes; `source` names the file in errors.
+pub(crate) fn decode(bytes: &[u8], source: &Path) -> anyhow::Result<Decoded> {
+    let corrupt = || {
+        format!(
+            "{} is not a readable safetensors checkpoint (retrain, or pass another --checkpoint)",
+            source.display()
+        )
+    };
+    let (_, header) = SafeTensors::read_metadata(bytes)
+        .map_err(|e| anyhow::anyhow!("{e:?}"))
+        .with_context(corrupt)?;
+    let file = SafeTensors::deserialize(bytes)
+        .map_err(|e| anyhow::anyhow!("{e:?}"))
+        .with_context(corrupt)?;
+    let mut tensors = BTreeMap::new();
+    for (name, view) in file.tensors() {
+        let kind = match view.dtype() {
+            Dtype::F32 => Kind::Float,
+            Dtype::F64 => Kind::Double,
+            Dtype::I64 => Kind::Int64,
+            Dtype::BF16 => Kind::BFloat16,
+            other => bail!(
+                "{}: tensor '{name}' has unsupported dtype {other:?}",
+                source.display()
+            ),
+        };
+        let shape: Vec<i64> = view.shape().iter().map(|&d| d as i64).collect();
+        let tensor = Tensor::f_from_data_size(view.data(), &shape, kind)
+            .with_context(|| format!("{}: tensor '{name}' is malformed", source.display()))?;
+        tensors.insert(name, tensor);
+    }
+    let meta = match header.metadata().as_ref().and_then(|m| m.get(META_KEY)) {
+        Some(text) => Some(parse_meta(text, source)?),
+        None => None,
+    };
+    Ok(Decoded { tensors, meta })
+}
+
+/// Parses and checks the training state's JSON.
+pub(crate) fn parse_meta(text: &str, source: &Path) -> anyhow::Result<CheckpointMeta> {
+    let meta: CheckpointMeta = serde_json::from_str(text).with_context(|| {
+        format!(
+            "{}: the training state is corrupt (delete it and retrain)",
+            source.display()
+        )
+    })?;
+    if meta.schema != CheckpointMeta::SCHEMA {
+        bail!(
+            "{} has schema '{}', expected '{}'",
+            source.display(),
+            meta.schema,
+            CheckpointMeta::SCHEMA
+        );
+    }
+    Ok(meta)
+}
+
+/// Reads and decodes a checkpoint file.
+pub(crate) fn read(path: &Path) -> anyhow::Result<Decoded> {
+    let bytes = std::fs::read(path).with_context(|| {
+        format!(
+            "reading {} (train first, or check --data and --checkpoint)",
+            path.display()
+        )
+    })?;
+    decode(&bytes, path)
+}
+
+/// Writes the weights (plus any extra tensors, sorted by name) with the training state inside,
+/// then the state's JSON copy; each through the atomic writer, the weights first.
+pub(crate) fn write(
+    named: Vec<(String, Tensor)>,
+    meta: &CheckpointMeta,
+    dir: &Path,
+    name: &str,
+) -> anyhow::Result<()> {
+    let (weights, sidecar) = checkpoint_paths(dir, name);
+    let mut named = named;
+    named.sort_by(|a, b| a.0.cmp(&b.0));
+    write_atomic(&weights, &encode(&named, meta)?)?;
+    let mut text = serde_json::to_string_pretty(meta)?;
+    text.push('\n');
+    write_atomic(&sidecar, text.as_bytes())
+}
