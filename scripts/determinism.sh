@@ -18,6 +18,17 @@ cd "$data"
   (cd "$data/labels" && sha256sum labels.json ./*_rgb.png)
   "$bin" --data "$data" --quiet train --epochs 3 >/dev/null
   (cd "$data/affordance" && sha256sum best.safetensors)
+  # The tensors alone (the header after the 8-byte length, with any metadata, left out):
+  # equal when only the file's metadata changed.
+  python3 - "$data/affordance/best.safetensors" <<'PY'
+import hashlib, json, struct, sys
+raw = open(sys.argv[1], "rb").read()
+(n,) = struct.unpack("<Q", raw[:8])
+header = json.loads(raw[8:8 + n])
+header.pop("__metadata__", None)
+digest = hashlib.sha256(json.dumps(header, sort_keys=True).encode() + raw[8 + n:]).hexdigest()
+print(f"{digest}  best.safetensors tensors")
+PY
   "$bin" --data "$data" --quiet eval --task test --seed 0 --json test.json >/dev/null
   "$bin" --data "$data" --quiet eval --task empty_bin --seeds 1-2 --n_past_action 8 \
     --json empty_bin.json >/dev/null

@@ -14,9 +14,10 @@ cd "$work"
 "$bin" --quiet label --json label.json >/dev/null
 "$bin" --quiet train --epochs 1 --json train.json >/dev/null
 "$bin" --quiet eval --task train --json eval.json >/dev/null
-for report in label train eval; do
-  grep -q "\"schema\": \"graspmap.$report/1\"" "$report.json" || {
-    echo "install-check: $report.json is not a graspmap.$report/1 report" >&2
+for report in label/1 train/1 eval/2; do
+  name=${report%/*}
+  grep -q "\"schema\": \"graspmap.$report\"" "$name.json" || {
+    echo "install-check: $name.json is not a graspmap.$report report" >&2
     exit 1
   }
 done

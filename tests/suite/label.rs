@@ -392,10 +392,10 @@ fn a_second_labeller_is_refused_at_once_and_a_killed_ones_lock_never_blocks() {
 #[test]
 fn ctrl_c_stops_after_the_current_round_and_the_rerun_finishes_the_same_dataset() {
     let reference = Workspace::new();
-    assert_ok(&reference.run(&["--per-object", "5"]));
+    assert_ok(&reference.run(&["--per-object", "3"]));
     let ws = Workspace::new();
     let child = ws
-        .command(&["--per-object", "5", "--threads", "1"])
+        .command(&["--per-object", "3", "--threads", "1"])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -408,7 +408,7 @@ fn ctrl_c_stops_after_the_current_round_and_the_rerun_finishes_the_same_dataset(
     assert!(stdout.contains("interrupted by SIGINT"), "{stdout}");
     assert!(stdout.contains("rerun the same command"), "{stdout}");
     assert_ok(&ws.run(&["--check"]));
-    assert_ok(&ws.run(&["--per-object", "5"]));
+    assert_ok(&ws.run(&["--per-object", "3"]));
     assert_eq!(ws.snapshot(), reference.snapshot());
 }
 
