@@ -256,6 +256,19 @@ fn bad_inputs_are_one_line_errors_with_exit_status_2() {
     assert_user_error(&out, &["tests", "empty_bin"]);
     let out = setup.run(&["eval", "--task", "empty_bin", "--seeds", "9-3"]);
     assert_user_error(&out, &["9-3"]);
+    // Centring reads the depth image through the full collision check: asked for without it,
+    // it is refused rather than silently ignored.
+    let out = setup.run(&[
+        "eval",
+        "--task",
+        "test",
+        "--centring",
+        "--collision-check",
+        "walls",
+    ]);
+    assert_user_error(&out, &["--centring", "--collision-check full", "walls"]);
+    let out = setup.run(&["eval", "--task", "test", "--resume"]);
+    assert_user_error(&out, &["--resume", "--json"]);
     let corrupt = setup.path("corrupt.safetensors");
     std::fs::write(&corrupt, b"not a checkpoint").unwrap();
     let out = setup.run(&[
