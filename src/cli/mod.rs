@@ -432,7 +432,14 @@ pub fn run() -> anyhow::Result<()> {
         }
     };
     init_logging(cli.global.quiet);
-    commands::interrupt::install().context("installing the Ctrl-C handler")?;
+    // The long writers stop at a safe point on the first Ctrl-C; the other commands keep the
+    // default, which ends them at once.
+    if matches!(
+        cli.command,
+        Command::Label(_) | Command::Train(_) | Command::Eval(_)
+    ) {
+        commands::interrupt::install().context("installing the Ctrl-C handler")?;
+    }
     let context = cli.global.context()?;
     let data = context.data.clone();
     match cli.command {
