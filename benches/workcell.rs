@@ -18,6 +18,19 @@ fn median(mut samples: Vec<Duration>) -> Duration {
     samples[samples.len() / 2]
 }
 
+/// The median wall time of `runs` calls of `work`.
+fn median_of<T>(runs: usize, mut work: impl FnMut() -> T) -> Duration {
+    median(
+        (0..runs)
+            .map(|_| {
+                let start = Instant::now();
+                std::hint::black_box(work());
+                start.elapsed()
+            })
+            .collect(),
+    )
+}
+
 fn main() {
     let library = ObjectLibrary::bundled();
     let split = SplitFile::Bundled.read().unwrap();
@@ -29,32 +42,20 @@ fn main() {
     let mut cell = Workcell::new(&Default::default()).unwrap();
     cell.drop_objects(&models, 2).unwrap();
     let scene = cell.drawables();
-    let frames: Vec<Duration> = (0..200)
-        .map(|_| {
-            let start = Instant::now();
-            std::hint::black_box(render(&camera, &scene));
-            start.elapsed()
-        })
-        .collect();
+    let frames = median_of(200, || render(&camera, &scene));
     println!(
         "render 128x128, {} drawables (15 objects + arm + totes): median {:.2} ms",
         scene.len(),
-        median(frames).as_secs_f64() * 1e3
+        frames.as_secs_f64() * 1e3
     );
 
     let oblique = graspmap::sim::oblique_camera();
-    let video: Vec<Duration> = (0..20)
-        .map(|_| {
-            let start = Instant::now();
-            std::hint::black_box(render(&oblique, &scene));
-            start.elapsed()
-        })
-        .collect();
+    let video = median_of(20, || render(&oblique, &scene));
     println!(
         "render {}x{} oblique video frame, same scene: median {:.2} ms",
         oblique.width,
         oblique.height,
-        median(video).as_secs_f64() * 1e3
+        video.as_secs_f64() * 1e3
     );
     let sphere = Arc::new(uv_sphere(0.08, 100, 150));
     let mut with_mesh = scene.clone();
@@ -64,17 +65,11 @@ fn main() {
         color: [0.5; 3],
         id: 99,
     });
-    let meshed: Vec<Duration> = (0..50)
-        .map(|_| {
-            let start = Instant::now();
-            std::hint::black_box(render(&camera, &with_mesh));
-            start.elapsed()
-        })
-        .collect();
+    let meshed = median_of(50, || render(&camera, &with_mesh));
     println!(
         "render 128x128, same scene + a {}-triangle mesh: median {:.2} ms",
         sphere.triangles.len(),
-        median(meshed).as_secs_f64() * 1e3
+        meshed.as_secs_f64() * 1e3
     );
 
     let mut attempts = Vec::new();

@@ -35,3 +35,9 @@ pub fn assert_user_error(output: &Output, needles: &[&str]) {
         assert!(stderr.contains(needle), "{needle:?} missing from: {stderr}");
     }
 }
+
+/// Sends `signal` to a child process, as a user's Ctrl-C or a supervisor's SIGTERM would.
+pub fn send_signal(child: &std::process::Child, signal: i32) {
+    // SAFETY: kill only sends a signal to the given PID.
+    assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
+}

@@ -378,8 +378,7 @@ fn ctrl_c_keeps_the_finished_scenes_and_resume_equals_an_uninterrupted_sweep() {
             break;
         }
     }
-    // SAFETY: kill only sends a signal to the given PID.
-    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGINT) }, 0);
+    crate::common::send_signal(&child, libc::SIGINT);
     let said: Vec<String> = lines.map(Result::unwrap).collect();
     assert_eq!(child.wait().unwrap().code(), Some(130), "{said:?}");
     assert!(

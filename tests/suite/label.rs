@@ -344,12 +344,6 @@ fn interactive_clicks_come_from_stdin() {
     assert_eq!((preview_image.width(), preview_image.height()), (512, 512));
 }
 
-/// Sends `signal` to a child process.
-fn signal(child: &std::process::Child, signal: i32) {
-    // SAFETY: kill only sends a signal to the given PID.
-    assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
-}
-
 /// Waits until `path` exists (a child has reached some point), at most 60 s.
 fn wait_for(path: &Path) {
     let start = std::time::Instant::now();
@@ -401,7 +395,7 @@ fn ctrl_c_stops_after_the_current_round_and_the_rerun_finishes_the_same_dataset(
         .spawn()
         .unwrap();
     wait_for(&ws.labels().join("labels.json"));
-    signal(&child, libc::SIGINT);
+    crate::common::send_signal(&child, libc::SIGINT);
     let out = child.wait_with_output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(130), "stdout: {stdout}");

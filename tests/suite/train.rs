@@ -311,8 +311,7 @@ fn sigterm_abandons_the_epoch_in_progress_and_resume_stays_exact() {
         assert!(start.elapsed().as_secs() < 60, "no epoch finished");
         std::thread::sleep(std::time::Duration::from_millis(10));
     }
-    // SAFETY: kill only sends a signal to the given PID.
-    assert_eq!(unsafe { libc::kill(child.id() as i32, libc::SIGTERM) }, 0);
+    crate::common::send_signal(&child, libc::SIGTERM);
     let out = child.wait_with_output().unwrap();
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert_eq!(out.status.code(), Some(143), "{stdout}");
