@@ -294,7 +294,7 @@ fn positive<T: std::str::FromStr + PartialOrd + Default + Copy + Into<f64>>(
 
 /// `graspmap label`.
 #[derive(Debug, Args)]
-#[command(group = clap::ArgGroup::new("clicker").args(["clicks", "interactive"]))]
+#[command(group = clap::ArgGroup::new("clicker").args(["clicks", "interactive", "web"]))]
 pub(crate) struct LabelArgs {
     /// Successful labels wanted per training object.
     #[arg(long, default_value_t = 12, value_parser = clap::value_parser!(u32).range(1..))]
@@ -311,6 +311,17 @@ pub(crate) struct LabelArgs {
     /// Click by hand: the image goes to --preview, commands come from stdin.
     #[arg(long)]
     pub(crate) interactive: bool,
+    /// Click by hand in the browser: serves the labelling page (and the labels page at /labels)
+    /// and prints its address; Ctrl-C stops it.
+    #[arg(long)]
+    pub(crate) web: bool,
+    /// --web: the port to serve on (0 picks a free one and prints it).
+    #[arg(long, default_value_t = 8000, requires = "web")]
+    pub(crate) port: u16,
+    /// --web: the address to bind. Anything but loopback lets other machines run the robot,
+    /// and prints a warning.
+    #[arg(long, default_value = "127.0.0.1", requires = "web")]
+    pub(crate) host: std::net::IpAddr,
     /// Where --interactive writes the image with the cursor's grasp [default: DATA/labels/preview.png].
     #[arg(long, value_name = "PNG", requires = "interactive")]
     pub(crate) preview: Option<PathBuf>,
@@ -324,7 +335,7 @@ pub(crate) struct LabelArgs {
     #[arg(long, conflicts_with = "check")]
     pub(crate) force: bool,
     /// Only validate the existing dataset; exit 2 if anything is wrong.
-    #[arg(long, conflicts_with_all = ["clicks", "interactive"])]
+    #[arg(long, conflicts_with_all = ["clicks", "interactive", "web"])]
     pub(crate) check: bool,
 }
 

@@ -140,6 +140,10 @@ impl GraspArgs {
 impl LabelArgs {
     pub(super) fn config(self, data: &Path) -> LabelConfig {
         let source = match (self.clicks, self.interactive) {
+            _ if self.web => ClickSource::Web {
+                host: self.host,
+                port: self.port,
+            },
             (Some(path), _) => ClickSource::File(path),
             (None, true) => ClickSource::Interactive {
                 preview: self

@@ -10,6 +10,7 @@ pub(crate) mod report;
 pub(crate) mod scene;
 pub(crate) mod train;
 pub(crate) mod video;
+pub(crate) mod web;
 
 use std::path::{Path, PathBuf};
 

@@ -104,7 +104,6 @@ impl Labels {
         self.entries.extend(rest);
     }
 
-    /// Appends a label for `object`; returns its 1-based index k.
     /// Takes the last label of `object` away again (undoing a [`Labels::push`]).
     pub(crate) fn pop(&mut self, object: &str) {
         if let Some((_, list)) = self.entries.iter_mut().find(|(name, _)| name == object) {
@@ -113,6 +112,16 @@ impl Labels {
         self.entries.retain(|(_, list)| !list.is_empty());
     }
 
+    /// Removes `object`'s label k (1-based), keeping the others in order.
+    pub(crate) fn remove(&mut self, object: &str, k: usize) {
+        if let Some((_, list)) = self.entries.iter_mut().find(|(name, _)| name == object) {
+            if (1..=list.len()).contains(&k) {
+                list.remove(k - 1);
+            }
+        }
+    }
+
+    /// Appends a label for `object`; returns its 1-based index k.
     pub(crate) fn push(&mut self, object: &str, label: Label) -> usize {
         match self.entries.iter_mut().find(|(name, _)| name == object) {
             Some((_, labels)) => {
@@ -375,12 +384,14 @@ pub(crate) const PROGRESS_FILE: &str = "progress.json";
 #[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct Progress {
-    /// `graspmap.label-progress/1`.
+    /// `graspmap.label-progress/2` (version 1, which named one click source for the whole
+    /// dataset, is read and upgraded).
     pub(crate) schema: String,
     /// The seed the rounds were drawn with.
     pub(crate) seed: u64,
-    /// The click source, e.g. `scripted`.
-    pub(crate) source: String,
+    /// Version 1's one click source; only read, moved into each object's `sources`.
+    #[serde(default, skip_serializing)]
+    pub(crate) source: Option<String>,
     /// Per object: rounds run and labels stored after them.
     pub(crate) rounds: Vec<ObjectProgress>,
 }
@@ -395,21 +406,79 @@ pub(crate) struct ObjectProgress {
     pub(crate) rounds: u32,
     /// Labels stored when the last round was counted.
     pub(crate) labels: u32,
+    /// The click source of each stored label, in label order (`scripted`, `file`,
+    /// `interactive`, `web`; `imported` for labels from a dataset without progress.json,
+    /// `unknown` for one whose run was killed before it recorded its source). A dataset may
+    /// be topped up by another source, so these can differ.
+    #[serde(default)]
+    pub(crate) sources: Vec<String>,
 }
 
 impl Progress {
-    /// Parses progress.json; `path` names it in errors.
+    /// Parses progress.json, upgrading version 1; `path` names it in errors.
     pub(crate) fn parse(text: &str, path: &Path) -> anyhow::Result<Self> {
-        serde_json::from_str(text).with_context(|| {
+        let mut progress: Progress = serde_json::from_str(text).with_context(|| {
             format!(
                 "{} is corrupt (delete it or rerun with --force)",
                 path.display()
             )
-        })
+        })?;
+        if progress.schema == Self::SCHEMA_V1 {
+            let source = progress.source.take().unwrap_or_else(|| "unknown".into());
+            for object in &mut progress.rounds {
+                object.sources = vec![source.clone(); object.labels as usize];
+            }
+            progress.schema = Self::SCHEMA.to_owned();
+        }
+        Ok(progress)
     }
 
     /// The schema name.
-    pub(crate) const SCHEMA: &'static str = "graspmap.label-progress/1";
+    pub(crate) const SCHEMA: &'static str = "graspmap.label-progress/2";
+    /// The first version, read and upgraded.
+    const SCHEMA_V1: &'static str = "graspmap.label-progress/1";
+
+    /// A new, empty progress record for `seed`.
+    pub(crate) fn new(seed: u64) -> Self {
+        Progress {
+            schema: Self::SCHEMA.to_owned(),
+            seed,
+            source: None,
+            rounds: Vec::new(),
+        }
+    }
+
+    /// Each stored label's click source, for `object`.
+    pub(crate) fn sources_of(&self, object: &str) -> &[String] {
+        self.rounds
+            .iter()
+            .find(|p| p.object == object)
+            .map_or(&[], |p| p.sources.as_slice())
+    }
+
+    /// Makes `object`'s source list as long as its label count: a new label's source is
+    /// `source`; a list longer than the labels (never written so) is cut.
+    pub(crate) fn record_sources(&mut self, object: &str, source: &str) {
+        if let Some(p) = self.rounds.iter_mut().find(|p| p.object == object) {
+            let labels = p.labels as usize;
+            p.sources.truncate(labels);
+            while p.sources.len() < labels {
+                p.sources.push(source.to_owned());
+            }
+        }
+    }
+
+    /// Removes `object`'s k-th label (1-based) from the record: one label fewer, its source
+    /// gone; the rounds already run stay counted, so the next round refills the label with a
+    /// new seed.
+    pub(crate) fn remove_label(&mut self, object: &str, k: usize) {
+        if let Some(p) = self.rounds.iter_mut().find(|p| p.object == object) {
+            p.labels = p.labels.saturating_sub(1);
+            if (1..=p.sources.len()).contains(&k) {
+                p.sources.remove(k - 1);
+            }
+        }
+    }
 
     /// Rounds run and labels recorded for `object`.
     pub(crate) fn entry(&self, object: &str) -> (u32, u32) {
@@ -435,6 +504,7 @@ impl Progress {
                 object: object.to_owned(),
                 rounds,
                 labels,
+                sources: Vec::new(),
             }),
         }
     }

@@ -10,3 +10,4 @@ pub mod augment;
 pub mod dataset;
 pub mod labels;
 pub mod lock;
+pub(crate) mod relabel;

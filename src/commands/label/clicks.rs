@@ -32,6 +32,11 @@ pub(super) enum Clicker {
     },
     /// A person (or a script) at stdin, looking at a preview image.
     Interactive { preview: PathBuf },
+    /// A person at the labelling page, which the server shows.
+    Web {
+        server: Box<crate::commands::web::WebServer>,
+        session: Box<crate::commands::web::session::LabelSession>,
+    },
 }
 
 impl Clicker {
@@ -40,6 +45,7 @@ impl Clicker {
             Clicker::Scripted { .. } => "scripted",
             Clicker::File { .. } => "file",
             Clicker::Interactive { .. } => "interactive",
+            Clicker::Web { .. } => "web",
         }
     }
 
@@ -82,6 +88,9 @@ impl Clicker {
             Clicker::Interactive { preview } => {
                 interactive_click(preview, object, round, frame).map(Ok)
             }
+            Clicker::Web { session, .. } => session
+                .await_click(object, round, &frame.to_rgb_image())
+                .map(Ok),
         }
     }
 }

@@ -1,6 +1,7 @@
 //! `graspmap label`: collect grasp labels round by round, each verified by a simulated pick, resumable after any interruption.
 
 mod clicks;
+mod web;
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -22,6 +23,8 @@ use crate::sim::{Workcell, WorkcellConfig};
 #[cfg(test)]
 pub(crate) use clicks::parse_clicks;
 use clicks::{check_enough_clicks, read_clicks, Clicker};
+use crate::commands::web::session::{AttemptView, LabelSession};
+use crate::commands::web::WebServer;
 
 /// One `graspmap label` run, resolved by the CLI.
 #[derive(Debug, Clone)]
@@ -53,6 +56,13 @@ pub(crate) enum ClickSource {
     Interactive {
         /// Where the image with the cursor's grasp is written.
         preview: PathBuf,
+    },
+    /// A person at a page in the browser, served on this address (port 0: any free one).
+    Web {
+        /// The address to bind.
+        host: std::net::IpAddr,
+        /// The port; 0 picks a free one.
+        port: u16,
     },
 }
 
@@ -99,34 +109,19 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     let split = context.split()?;
     let models = context.objects.load_all(&split.train)?;
     let clicker = clicker(&args, &split.train)?;
+    if let Clicker::Web { server, .. } = &clicker {
+        context.say(&format!(
+            "labelling page at {} (open it in a browser; Ctrl-C stops the server)",
+            server.url()
+        ));
+    }
 
-    if args.force {
-        store.clear()?;
-    }
-    store.remove_stale_temporaries()?;
-    let mut labels = store.load()?;
-    let mut progress = resume_point(&store, &labels, &args, clicker.name(), &split.train)?;
-    if let Clicker::File { clicks } = &clicker {
-        check_enough_clicks(clicks, &labels, &progress, &args, &split.train)?;
-    }
-    labels.arrange(&split.train);
-    for object in &split.train {
-        let (rounds, recorded) = progress.entry(object);
-        progress.set_rounds(object, rounds, recorded);
-    }
-    // A run stopped between writing labels.json and progress.json left the round uncounted on
-    // disk; record the repaired count now, in case no later round writes it.
-    if store
-        .load_progress()?
-        .is_some_and(|on_disk| on_disk != progress)
-    {
-        store.save_progress(&progress)?;
-    }
+    let (labels, progress) = prepare(&store, &args, &clicker, &split.train)?;
 
     let start = Instant::now();
-    let interactive = matches!(clicker, Clicker::Interactive { .. });
-    // A person at the prompt needs a quiet terminal.
-    let bar = if interactive {
+    // A person at the prompt, or at the page, needs a quiet terminal and one round at a time.
+    let by_hand = matches!(clicker, Clicker::Interactive { .. } | Clicker::Web { .. });
+    let bar = if by_hand {
         indicatif::ProgressBar::hidden()
     } else {
         context.progress_bar(
@@ -145,30 +140,93 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
         verbose_rounds: !matches!(clicker, Clicker::Scripted { .. }),
         stop: &stop,
     };
-    // A person answers one prompt at a time.
-    let workers = if interactive {
+    let workers = if by_hand {
         1
     } else {
         usize::from(context.threads)
     };
     let shared = Mutex::new(Shared { labels, progress });
-    let summaries = job.label_all(&split.train, &models, &shared, workers)?;
+    let finished = |summaries: &[ObjectSummary]| {
+        finish(context, &args, &clicker, &store, &split.train, summaries, start)
+    };
+    let outcome = match &clicker {
+        Clicker::Web { server, session } => {
+            job.label_with_page(&split.train, &models, &shared, (server, session), &finished)
+        }
+        _ => job.label_all(&split.train, &models, &shared, workers),
+    };
     bar.finish_and_clear();
     if let Some(interrupted) = interrupt::requested() {
-        let kept = lock(&shared).labels.len();
+        let state = lock(&shared);
+        let kept = state.labels.len();
+        let wanted = args.per_object as u64 * split.train.len() as u64;
+        if matches!(clicker, Clicker::Web { .. })
+            && labels_in(&state.labels, &split.train, args.per_object) == wanted
+        {
+            context.say(&format!(
+                "server stopped; {kept} labels in {}, complete",
+                store.dir().display()
+            ));
+            return Ok(());
+        }
         context.say(&format!(
             "{interrupted}: {kept} labels kept in {}, each verified and saved; rerun the same command to continue",
             store.dir().display()
         ));
         return Err(interrupted.into());
     }
+    finished(&outcome?)
+}
 
+/// Clears or repairs the store before the rounds: the labels and progress to continue from.
+fn prepare(
+    store: &LabelStore,
+    args: &LabelConfig,
+    clicker: &Clicker,
+    train: &[String],
+) -> anyhow::Result<(Labels, Progress)> {
+    if args.force {
+        store.clear()?;
+    }
+    store.remove_stale_temporaries()?;
+    store.remove_stale_staging()?;
+    let mut labels = store.load()?;
+    let mut progress = resume_point(store, &labels, args, train)?;
+    if let Clicker::File { clicks } = clicker {
+        check_enough_clicks(clicks, &labels, &progress, args, train)?;
+    }
+    labels.arrange(train);
+    for object in train {
+        let (rounds, recorded) = progress.entry(object);
+        progress.set_rounds(object, rounds, recorded);
+    }
+    // A run stopped between writing labels.json and progress.json left the round uncounted on
+    // disk; record the repaired count now, in case no later round writes it.
+    if store
+        .load_progress()?
+        .is_some_and(|on_disk| on_disk != progress)
+    {
+        store.save_progress(&progress)?;
+    }
+    Ok((labels, progress))
+}
+
+/// Prints the summary of a complete dataset and writes the JSON report.
+fn finish(
+    context: &Context,
+    args: &LabelConfig,
+    clicker: &Clicker,
+    store: &LabelStore,
+    train: &[String],
+    summaries: &[ObjectSummary],
+    start: Instant,
+) -> anyhow::Result<()> {
     let results = LabelResults {
         labels_dir: store.dir().display().to_string(),
         source: clicker.name(),
         total_labels: summaries.iter().map(|s| s.labels).sum(),
         total_rounds: summaries.iter().map(|s| s.rounds).sum(),
-        objects: summaries,
+        objects: summaries.to_vec(),
         wall_seconds: start.elapsed().as_secs_f64(),
     };
     print_summary(context, &results);
@@ -184,7 +242,7 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
             },
             "click_noise_px": args.noise.px,
             "angle_noise_deg": args.noise.deg,
-            "train": split.train,
+            "train": train,
         });
         write_report(json, "label", args.seed, &resolved, &results)?;
     }
@@ -204,10 +262,18 @@ fn clicker(args: &LabelConfig, train: &[String]) -> anyhow::Result<Clicker> {
             noise_px: args.noise.px,
             noise_deg: args.noise.deg,
         },
+        ClickSource::Web { host, port } => {
+            let server = WebServer::bind(*host, *port)?;
+            let session = LabelSession::new(web::pad_width_px(&crate::vision::camera::Camera::top_down()));
+            Clicker::Web {
+                server: Box::new(server),
+                session: Box::new(session),
+            }
+        }
     })
 }
 
-/// Dataset state shared by the workers.
+/// Dataset state shared by the workers (and the labels page, under `--web`).
 struct Shared {
     labels: Labels,
     progress: Progress,
@@ -312,28 +378,14 @@ impl ObjectJob<'_> {
             let click = self
                 .clicker
                 .click(object, round, round_seed, &camera, &frame)?;
-            let (reason, detail) = match &click {
-                Ok(grasp) => {
-                    let outcome = cell.pick(&world_grasp(&camera, &frame, *grasp));
-                    (outcome.reason, outcome.detail)
-                }
-                Err(why) => (PickReason::Ungraspable, why.clone()),
-            };
-            let line = match &click {
-                Ok(g) => format!(
-                    "{object} round {round} click ({}, {}, {:.1}°): {} {detail}",
-                    g.u,
-                    g.v,
-                    g.angle_deg,
-                    reason.as_str()
-                ),
-                Err(_) => format!("{object} round {round}: no click: {detail}"),
-            };
+            let (reason, detail, film) = self.try_click(&mut cell, &frame, &click);
+            let line = round_line(object, round, &click, reason, &detail);
             round += 1;
             {
                 let mut state = lock(shared);
                 let Shared { labels, progress } = &mut *state;
-                if let (PickReason::Success, Ok(grasp)) = (reason, &click) {
+                let stored = matches!((reason, &click), (PickReason::Success, Ok(_)));
+                if let (true, Ok(grasp)) = (stored, &click) {
                     self.store.append(
                         labels,
                         object,
@@ -347,7 +399,19 @@ impl ObjectJob<'_> {
                 }
                 have = labels.of(object).len();
                 progress.set_rounds(object, round, have as u32);
+                progress.record_sources(object, self.clicker.name());
                 self.store.save_progress(progress)?;
+                if let Clicker::Web { session, .. } = self.clicker {
+                    session.finish_attempt(AttemptView {
+                        object: object.to_owned(),
+                        round: round - 1,
+                        grasp: click.as_ref().ok().copied(),
+                        reason: reason.as_str().to_owned(),
+                        detail: detail.clone(),
+                        stored,
+                        frames: film,
+                    })?;
+                }
             }
             if self.verbose_rounds || reason != PickReason::Success {
                 self.bar.suspend(|| self.context.say(&line));
@@ -356,6 +420,54 @@ impl ObjectJob<'_> {
         summary.rounds = round;
         summary.labels = have;
         Ok(summary)
+    }
+}
+
+impl ObjectJob<'_> {
+    /// Runs the clicked grasp in the simulator: its reason, detail, and (for the page) the
+    /// oblique view's frames.
+    fn try_click(
+        &self,
+        cell: &mut Workcell,
+        frame: &crate::vision::render::Frame,
+        click: &Result<crate::grasp::PixelGrasp, String>,
+    ) -> (PickReason, String, Vec<image::RgbImage>) {
+        let Ok(grasp) = click else {
+            let why = click.as_ref().err().cloned().unwrap_or_default();
+            return (PickReason::Ungraspable, why, Vec::new());
+        };
+        let filmed = matches!(self.clicker, Clicker::Web { .. });
+        if filmed {
+            cell.start_recording(web::FILM_EVERY_STEPS);
+        }
+        let camera = *cell.camera();
+        let outcome = cell.pick(&world_grasp(&camera, frame, *grasp));
+        let film = if filmed {
+            cell.take_recording()
+        } else {
+            Vec::new()
+        };
+        (outcome.reason, outcome.detail, film)
+    }
+}
+
+/// The line a round prints.
+fn round_line(
+    object: &str,
+    round: u32,
+    click: &Result<crate::grasp::PixelGrasp, String>,
+    reason: PickReason,
+    detail: &str,
+) -> String {
+    match click {
+        Ok(g) => format!(
+            "{object} round {round} click ({}, {}, {:.1}°): {} {detail}",
+            g.u,
+            g.v,
+            g.angle_deg,
+            reason.as_str()
+        ),
+        Err(_) => format!("{object} round {round}: no click: {detail}"),
     }
 }
 
@@ -392,15 +504,9 @@ fn resume_point(
     store: &LabelStore,
     labels: &Labels,
     args: &LabelConfig,
-    source: &str,
     train: &[String],
 ) -> anyhow::Result<Progress> {
-    let fresh = Progress {
-        schema: Progress::SCHEMA.to_owned(),
-        seed: args.seed,
-        source: source.to_owned(),
-        rounds: Vec::new(),
-    };
+    let fresh = Progress::new(args.seed);
     let Some(mut progress) = store.load_progress()? else {
         if !labels.is_empty() {
             // A dataset from elsewhere (e.g. the reference tool): its rounds are unknown, so
@@ -413,6 +519,7 @@ fn resume_point(
             for object in train {
                 let n = labels.of(object).len() as u32;
                 progress.set_rounds(object, n, n);
+                progress.record_sources(object, "imported");
             }
             return Ok(progress);
         }
@@ -429,12 +536,14 @@ fn resume_point(
             Progress::SCHEMA
         );
     }
-    if progress.seed != args.seed || progress.source != source {
+    // Any click source may top a dataset up (scripted first, then fixed by hand): each
+    // label records its own. The seed decides every round's drop, so it must match.
+    if progress.seed != args.seed {
         bail!(
-            "the labels in {} were made with --seed {} ({} clicks); rerun with those settings to resume, or with --force to start over",
+            "the labels in {} were made with --seed {}; rerun with --seed {} to resume, or with --force to start over",
             store.dir().display(),
             progress.seed,
-            progress.source
+            progress.seed
         );
     }
     // A run killed between writing labels.json and progress.json: the label is there, its
@@ -444,6 +553,8 @@ fn resume_point(
         let stored = labels.of(object).len() as u32;
         if stored == recorded + 1 {
             progress.set_rounds(object, rounds + 1, stored);
+            // Its run stopped before it could say which source made it.
+            progress.record_sources(object, "unknown");
         } else if stored != recorded {
             bail!(
                 "{}: {object} has {stored} labels but progress.json records {recorded}; rerun with --force to start over",

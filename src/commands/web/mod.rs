@@ -1,0 +1,247 @@
+//! The local web server behind `label --web` and `report --serve`: tiny_http on one thread,
+//! guarded so that it is safe to leave running on a workstation.
+//!
+//! - It binds 127.0.0.1 unless told otherwise.
+//! - A request whose Host or Origin is not the served address is refused with 403, which
+//!   stops DNS rebinding and other sites' pages from driving the robot or deleting labels.
+//! - Bodies are capped at [`MAX_BODY_BYTES`]; a bad request gets a 4xx with a one-line
+//!   message and the server keeps running.
+//!
+//! The pages are plain HTML, CSS and JavaScript embedded in the binary.
+
+pub(crate) mod labels_page;
+pub(crate) mod session;
+
+use std::io::Read;
+use std::net::{IpAddr, SocketAddr};
+use std::time::Duration;
+
+use anyhow::Context as _;
+
+/// The largest request body accepted; the API's bodies are a few dozen bytes.
+pub(crate) const MAX_BODY_BYTES: usize = 16 * 1024;
+
+/// The shared stylesheet and helpers of every page.
+const STYLE_CSS: &str = include_str!("../../../assets/web/style.css");
+
+/// A parsed request, as the routes see it.
+pub(crate) struct Request {
+    /// `GET`, `POST`, `DELETE`, …
+    pub(crate) method: String,
+    /// The path, without the query.
+    pub(crate) path: String,
+    /// The body (at most [`MAX_BODY_BYTES`]).
+    pub(crate) body: Vec<u8>,
+}
+
+impl Request {
+    /// The body as a JSON object, or a 400 saying what is wrong with it.
+    pub(crate) fn json(&self) -> Result<serde_json::Value, Reply> {
+        let value: serde_json::Value = serde_json::from_slice(&self.body)
+            .map_err(|e| Reply::error(400, &format!("the body is not valid JSON: {e}")))?;
+        if !value.is_object() {
+            return Err(Reply::error(400, "the body must be a JSON object"));
+        }
+        Ok(value)
+    }
+}
+
+/// A response.
+pub(crate) struct Reply {
+    pub(crate) status: u16,
+    pub(crate) content_type: &'static str,
+    pub(crate) body: Vec<u8>,
+}
+
+impl Reply {
+    /// A JSON body with status 200.
+    pub(crate) fn json(value: &serde_json::Value) -> Self {
+        Reply {
+            status: 200,
+            content_type: "application/json",
+            body: serde_json::to_vec(value).expect("JSON values serialise"),
+        }
+    }
+
+    /// A one-line error, as JSON `{"error": …}` so that the page can show it.
+    pub(crate) fn error(status: u16, message: &str) -> Self {
+        let mut reply = Reply::json(&serde_json::json!({ "error": message }));
+        reply.status = status;
+        reply
+    }
+
+    /// Bytes of a given type.
+    pub(crate) fn bytes(content_type: &'static str, body: Vec<u8>) -> Self {
+        Reply {
+            status: 200,
+            content_type,
+            body,
+        }
+    }
+
+    /// An embedded text asset.
+    pub(crate) fn text(content_type: &'static str, text: &str) -> Self {
+        Reply::bytes(content_type, text.as_bytes().to_vec())
+    }
+
+    /// 404 naming the path.
+    pub(crate) fn not_found(path: &str) -> Self {
+        Reply::error(404, &format!("no such page: {path}"))
+    }
+}
+
+/// Answers one request; `None` when the path is not this route set's.
+pub(crate) type Route<'a> = dyn Fn(&Request) -> Option<Reply> + Sync + 'a;
+
+/// The bound server.
+pub(crate) struct WebServer {
+    server: tiny_http::Server,
+    address: SocketAddr,
+}
+
+impl WebServer {
+    /// Binds `host:port` (port 0 picks a free one).
+    pub(crate) fn bind(host: IpAddr, port: u16) -> anyhow::Result<Self> {
+        let wanted = SocketAddr::new(host, port);
+        let server = tiny_http::Server::http(wanted).map_err(|e| {
+            anyhow::anyhow!("cannot serve on {wanted}: {e} (pick another --port, or 0 for any free one)")
+        })?;
+        let address = server
+            .server_addr()
+            .to_ip()
+            .context("the server has no IP address")?;
+        if !host.is_loopback() {
+            tracing::warn!(
+                "serving on {address}: other machines on the network can reach this page and run the robot; use --host 127.0.0.1 to keep it local"
+            );
+        }
+        Ok(WebServer { server, address })
+    }
+
+    /// The address it serves.
+    pub(crate) fn url(&self) -> String {
+        format!("http://{}/", self.host_port())
+    }
+
+    fn host_port(&self) -> String {
+        match self.address.ip() {
+            IpAddr::V6(ip) => format!("[{ip}]:{}", self.address.port()),
+            IpAddr::V4(ip) => format!("{ip}:{}", self.address.port()),
+        }
+    }
+
+    /// The Host values that name this server: the bound address, and localhost on loopback.
+    fn allowed_hosts(&self) -> Vec<String> {
+        let port = self.address.port();
+        let mut hosts = vec![self.host_port()];
+        if self.address.ip().is_loopback() {
+            hosts.push(format!("localhost:{port}"));
+            hosts.push(format!("127.0.0.1:{port}"));
+        }
+        hosts
+    }
+
+    /// Serves `routes` (tried in order) until `stop` says so; checks it every 100 ms.
+    pub(crate) fn serve(&self, routes: &[&Route<'_>], stop: &dyn Fn() -> bool) {
+        let allowed = self.allowed_hosts();
+        while !stop() {
+            let mut request = match self.server.recv_timeout(Duration::from_millis(100)) {
+                Ok(Some(request)) => request,
+                Ok(None) => continue,
+                Err(e) => {
+                    tracing::warn!("web server: {e}");
+                    continue;
+                }
+            };
+            let reply = match guard(&request, &allowed).and_then(|()| read_body(&mut request)) {
+                Ok(body) => route(
+                    &Request {
+                        method: request.method().as_str().to_owned(),
+                        path: request.url().split('?').next().unwrap_or("").to_owned(),
+                        body,
+                    },
+                    routes,
+                ),
+                Err(refusal) => refusal,
+            };
+            let header = tiny_http::Header::from_bytes("Content-Type", reply.content_type)
+                .expect("content types are valid header values");
+            let response = tiny_http::Response::from_data(reply.body)
+                .with_status_code(reply.status)
+                .with_header(header)
+                .with_header(
+                    tiny_http::Header::from_bytes("Cache-Control", "no-store")
+                        .expect("a valid header"),
+                );
+            // A client that went away is not the server's problem.
+            let _ = request.respond(response);
+        }
+    }
+}
+
+/// Refuses requests that are not for this server (Host, Origin) or too large.
+fn guard(request: &tiny_http::Request, allowed: &[String]) -> Result<(), Reply> {
+    let header = |name: &'static str| {
+        request
+            .headers()
+            .iter()
+            .find(|h| h.field.equiv(name))
+            .map(|h| h.value.as_str().to_owned())
+    };
+    let host = header("Host").unwrap_or_default();
+    if !allowed.iter().any(|a| a.eq_ignore_ascii_case(&host)) {
+        return Err(Reply::error(
+            403,
+            &format!(
+                "Host '{host}' is not this server; open http://{} instead",
+                allowed[0]
+            ),
+        ));
+    }
+    if let Some(origin) = header("Origin") {
+        let ours = allowed
+            .iter()
+            .any(|a| origin.eq_ignore_ascii_case(&format!("http://{a}")));
+        if !ours {
+            return Err(Reply::error(
+                403,
+                &format!("requests from the page at '{origin}' are refused"),
+            ));
+        }
+    }
+    if request.body_length().is_some_and(|n| n > MAX_BODY_BYTES) {
+        return Err(Reply::error(
+            413,
+            &format!("the body is larger than {MAX_BODY_BYTES} bytes"),
+        ));
+    }
+    Ok(())
+}
+
+/// The first route that knows the path answers; the stylesheet is shared by all pages.
+fn route(request: &Request, routes: &[&Route<'_>]) -> Reply {
+    if request.path == "/style.css" {
+        return Reply::text("text/css; charset=utf-8", STYLE_CSS);
+    }
+    routes
+        .iter()
+        .find_map(|route| route(request))
+        .unwrap_or_else(|| Reply::not_found(&request.path))
+}
+
+/// Reads at most [`MAX_BODY_BYTES`] + 1 bytes of the body; more is a 413.
+fn read_body(request: &mut tiny_http::Request) -> Result<Vec<u8>, Reply> {
+    let mut body = Vec::new();
+    request
+        .as_reader()
+        .take(MAX_BODY_BYTES as u64 + 1)
+        .read_to_end(&mut body)
+        .map_err(|e| Reply::error(400, &format!("reading the body: {e}")))?;
+    if body.len() > MAX_BODY_BYTES {
+        return Err(Reply::error(
+            413,
+            &format!("the body is larger than {MAX_BODY_BYTES} bytes"),
+        ));
+    }
+    Ok(body)
+}
