@@ -334,9 +334,29 @@ pub(crate) struct LabelArgs {
     /// Delete existing labels and start over.
     #[arg(long, conflicts_with = "check")]
     pub(crate) force: bool,
+    /// Delete one label, e.g. YcbHammer:3: that object's later labels (and their sidecar files)
+    /// move down one number in one crash-safe step; the next labelling run refills it.
+    #[arg(long, value_name = "OBJECT:K", value_parser = parse_label_address,
+          conflicts_with_all = ["clicks", "interactive", "web", "check", "force"])]
+    pub(crate) delete: Option<(String, usize)>,
     /// Only validate the existing dataset; exit 2 if anything is wrong.
     #[arg(long, conflicts_with_all = ["clicks", "interactive", "web"])]
     pub(crate) check: bool,
+}
+
+/// `YcbHammer:3`: an object and a label number from 1.
+fn parse_label_address(text: &str) -> Result<(String, usize), String> {
+    let fail = || format!("'{text}' is not OBJECT:K, e.g. YcbHammer:3 (K counts from 1)");
+    let (object, k) = text.rsplit_once(':').ok_or_else(fail)?;
+    let k = k
+        .parse::<usize>()
+        .ok()
+        .filter(|&k| k >= 1)
+        .ok_or_else(fail)?;
+    if object.is_empty() {
+        return Err(fail());
+    }
+    Ok((object.to_owned(), k))
 }
 
 fn non_negative(text: &str) -> Result<f32, String> {

@@ -163,6 +163,7 @@ impl LabelArgs {
             },
             force: self.force,
             check: self.check,
+            delete: self.delete,
         }
     }
 }

@@ -229,7 +229,7 @@ impl LabelStore {
     }
 
     /// Path of the k-th image of an object.
-    pub(crate) fn image_path(&self, object: &str, k: usize) -> PathBuf {
+    pub fn image_path(&self, object: &str, k: usize) -> PathBuf {
         self.dir.join(format!("{object}_{k}_rgb.png"))
     }
 

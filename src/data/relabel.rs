@@ -102,15 +102,11 @@ impl LabelStore {
 
         self.remove_stale_staging()?;
         let staging = self.staging_dir();
-        std::fs::create_dir(&staging)
-            .with_context(|| format!("creating {}", staging.display()))?;
+        std::fs::create_dir(&staging).with_context(|| format!("creating {}", staging.display()))?;
         abort_point(1);
         self.link_survivors(&staging, object, k)?;
         abort_point(2);
-        write_atomic(
-            &staging.join(LABELS_FILE),
-            next_labels.to_json().as_bytes(),
-        )?;
+        write_atomic(&staging.join(LABELS_FILE), next_labels.to_json().as_bytes())?;
         abort_point(3);
         if let Some(next) = &next_progress {
             let mut text = serde_json::to_vec_pretty(next)?;
@@ -136,8 +132,8 @@ impl LabelStore {
     /// Hard-links every file that survives the delete into `staging`, under its new name. The
     /// lock file is linked too: the same inode, so the writer's lock holds across the exchange.
     fn link_survivors(&self, staging: &Path, object: &str, k: usize) -> anyhow::Result<()> {
-        let entries =
-            std::fs::read_dir(self.dir()).with_context(|| format!("reading {}", self.dir().display()))?;
+        let entries = std::fs::read_dir(self.dir())
+            .with_context(|| format!("reading {}", self.dir().display()))?;
         for entry in entries {
             let entry = entry.with_context(|| format!("reading {}", self.dir().display()))?;
             let name = entry.file_name().to_string_lossy().into_owned();
@@ -152,7 +148,9 @@ impl LabelStore {
             let to = staging.join(&target);
             std::fs::hard_link(entry.path(), &to)
                 .or_else(|_| std::fs::copy(entry.path(), &to).map(|_| ()))
-                .with_context(|| format!("linking {} to {}", entry.path().display(), to.display()))?;
+                .with_context(|| {
+                    format!("linking {} to {}", entry.path().display(), to.display())
+                })?;
         }
         Ok(())
     }

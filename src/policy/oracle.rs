@@ -58,6 +58,17 @@ pub(crate) const PLANNED_ANGLES: u32 = 16;
 /// Sampling step of the planner's point-cloud queries (m).
 pub(crate) const SAMPLING_STEP: f32 = 0.002;
 
+impl OracleConfig {
+    /// The default planner on `angles` evenly spaced angles (8: the 22.5° steps a person
+    /// turns the gripper in, which the scripted clicker and the browser test plan in).
+    pub fn with_angles(angles: u32) -> Self {
+        OracleConfig {
+            angles,
+            ..OracleConfig::default()
+        }
+    }
+}
+
 impl Default for OracleConfig {
     fn default() -> Self {
         Self {

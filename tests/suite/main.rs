@@ -11,3 +11,4 @@ mod label;
 mod libtorch;
 mod physics;
 mod train;
+mod web;

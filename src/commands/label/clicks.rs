@@ -64,10 +64,7 @@ impl Clicker {
                 noise_deg,
             } => {
                 // A person clicks in 22.5° steps; plan in those steps too.
-                let config = OracleConfig {
-                    angles: (180.0 / ANGLE_STEP_DEG) as u32,
-                    ..OracleConfig::default()
-                };
+                let config = OracleConfig::with_angles((180.0 / ANGLE_STEP_DEG) as u32);
                 let plan = match oracle::plan(camera, frame, 1, &config) {
                     Ok(plan) => plan,
                     Err(e) => return Ok(Err(e.to_string())),

@@ -14,6 +14,8 @@ use super::interrupt;
 use super::report::write_report;
 use super::Context;
 use crate::assets::objects::ObjectModel;
+use crate::commands::web::session::{AttemptView, LabelSession};
+use crate::commands::web::WebServer;
 use crate::data::labels::{Label, LabelStore, Labels, Progress};
 use crate::data::lock::StoreLock;
 use crate::grasp::world_grasp;
@@ -23,8 +25,6 @@ use crate::sim::{Workcell, WorkcellConfig};
 #[cfg(test)]
 pub(crate) use clicks::parse_clicks;
 use clicks::{check_enough_clicks, read_clicks, Clicker};
-use crate::commands::web::session::{AttemptView, LabelSession};
-use crate::commands::web::WebServer;
 
 /// One `graspmap label` run, resolved by the CLI.
 #[derive(Debug, Clone)]
@@ -43,6 +43,8 @@ pub(crate) struct LabelConfig {
     pub(crate) force: bool,
     /// Only validate the existing dataset.
     pub(crate) check: bool,
+    /// Only delete this label (object, k from 1), renumbering the object's later ones.
+    pub(crate) delete: Option<(String, usize)>,
 }
 
 /// Where a round's click comes from.
@@ -106,6 +108,9 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
         return check(context, &store, &context.objects.names());
     }
     let _writer = StoreLock::acquire(store.dir(), "label")?;
+    if let Some((object, k)) = &args.delete {
+        return delete(context, &store, object, *k);
+    }
     let split = context.split()?;
     let models = context.objects.load_all(&split.train)?;
     let clicker = clicker(&args, &split.train)?;
@@ -147,7 +152,15 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     };
     let shared = Mutex::new(Shared { labels, progress });
     let finished = |summaries: &[ObjectSummary]| {
-        finish(context, &args, &clicker, &store, &split.train, summaries, start)
+        finish(
+            context,
+            &args,
+            &clicker,
+            &store,
+            &split.train,
+            summaries,
+            start,
+        )
     };
     let outcome = match &clicker {
         Clicker::Web { server, session } => {
@@ -264,7 +277,8 @@ fn clicker(args: &LabelConfig, train: &[String]) -> anyhow::Result<Clicker> {
         },
         ClickSource::Web { host, port } => {
             let server = WebServer::bind(*host, *port)?;
-            let session = LabelSession::new(web::pad_width_px(&crate::vision::camera::Camera::top_down()));
+            let session =
+                LabelSession::new(web::pad_width_px(&crate::vision::camera::Camera::top_down()));
             Clicker::Web {
                 server: Box::new(server),
                 session: Box::new(session),
@@ -563,6 +577,28 @@ fn resume_point(
         }
     }
     Ok(progress)
+}
+
+/// `label --delete OBJECT:K`, under the writer lock.
+fn delete(context: &Context, store: &LabelStore, object: &str, k: usize) -> anyhow::Result<()> {
+    store.remove_stale_temporaries()?;
+    store.remove_stale_staging()?;
+    let mut labels = store.load()?;
+    // A dataset without progress.json (e.g. the reference tool's) stays without one.
+    let mut progress = store.load_progress()?;
+    store.delete_label(&mut labels, progress.as_mut(), object, k)?;
+    context.say(&format!(
+        "deleted {object} label {k} in {}; {} left for {object}, numbered 1..{}; the next `graspmap label` refills it",
+        store.dir().display(),
+        labels.of(object).len(),
+        labels.of(object).len()
+    ));
+    if let Some(json) = &context.json {
+        let resolved = serde_json::json!({ "global": context, "delete": [object, k] });
+        let results = serde_json::json!({ "labels_dir": store.dir(), "object": object, "deleted": k, "left": labels.of(object).len() });
+        write_report(json, "label", 0, &resolved, &results)?;
+    }
+    Ok(())
 }
 
 /// `label --check`: every problem on stdout, then exit 2 if there was any.

@@ -5,10 +5,10 @@ use std::sync::Mutex;
 
 use super::{labels_in, lock, ObjectJob, ObjectSummary, Shared};
 use crate::assets::objects::ObjectModel;
+use crate::commands::interrupt;
 use crate::commands::web::labels_page::{self, LabelsAccess};
 use crate::commands::web::session::LabelSession;
 use crate::commands::web::{Reply, Request, WebServer};
-use crate::commands::interrupt;
 use crate::data::labels::{LabelStore, Labels, Progress};
 use crate::grasp::gripper::GRIPPER;
 use crate::grasp::tote::{FLOOR_TOP, PICK_TOTE};

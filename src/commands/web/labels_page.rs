@@ -178,7 +178,14 @@ mod tests {
             label_address("YcbHammer/12"),
             Ok(("YcbHammer".into(), 12, false))
         );
-        for bad in ["YcbHammer", "YcbHammer/0", "YcbHammer/x.png", "../x/1", "/1", "a b/1"] {
+        for bad in [
+            "YcbHammer",
+            "YcbHammer/0",
+            "YcbHammer/x.png",
+            "../x/1",
+            "/1",
+            "a b/1",
+        ] {
             assert!(label_address(bad).is_err(), "{bad}");
         }
     }

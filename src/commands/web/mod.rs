@@ -104,7 +104,9 @@ impl WebServer {
     pub(crate) fn bind(host: IpAddr, port: u16) -> anyhow::Result<Self> {
         let wanted = SocketAddr::new(host, port);
         let server = tiny_http::Server::http(wanted).map_err(|e| {
-            anyhow::anyhow!("cannot serve on {wanted}: {e} (pick another --port, or 0 for any free one)")
+            anyhow::anyhow!(
+                "cannot serve on {wanted}: {e} (pick another --port, or 0 for any free one)"
+            )
         })?;
         let address = server
             .server_addr()

@@ -133,7 +133,8 @@ impl LabelSession {
         }
         let mut jpeg = std::io::Cursor::new(Vec::new());
         if !frames.is_empty() {
-            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 85).encode_image(&strip)?;
+            image::codecs::jpeg::JpegEncoder::new_with_quality(&mut jpeg, 85)
+                .encode_image(&strip)?;
         }
         let frame_count = frames.len();
         let mut state = self.lock();
@@ -149,6 +150,8 @@ impl LabelSession {
             frame_count,
         });
         state.running = false;
+        // That round is over: nothing on the page may click or confirm it any more.
+        state.round = None;
         self.changed.notify_all();
         Ok(())
     }
@@ -220,9 +223,10 @@ impl LabelSession {
 
     fn state_json(&self, dataset: serde_json::Value) -> serde_json::Value {
         let state = self.lock();
-        let round = state.round.as_ref().map(|r| {
-            serde_json::json!({ "id": r.id, "object": r.object, "round": r.round })
-        });
+        let round = state
+            .round
+            .as_ref()
+            .map(|r| serde_json::json!({ "id": r.id, "object": r.object, "round": r.round }));
         let last = state.last.as_ref().map(|a| {
             serde_json::json!({
                 "id": a.id,
@@ -275,7 +279,9 @@ impl LabelSession {
         let (x, y) = (coordinate("x")?, coordinate("y")?);
         let mut state = self.lock();
         state.centre = Some((x, y));
-        Ok(Reply::json(&serde_json::json!({ "centre": [x, y], "angle": state.angle_deg })))
+        Ok(Reply::json(
+            &serde_json::json!({ "centre": [x, y], "angle": state.angle_deg }),
+        ))
     }
 
     fn rotate(&self, request: &Request) -> Result<Reply, Reply> {
@@ -289,7 +295,9 @@ impl LabelSession {
             })?;
         let mut state = self.lock();
         state.angle_deg = normalize_angle(state.angle_deg + steps as f32 * BIN_DEG);
-        Ok(Reply::json(&serde_json::json!({ "angle": state.angle_deg })))
+        Ok(Reply::json(
+            &serde_json::json!({ "angle": state.angle_deg }),
+        ))
     }
 
     fn confirm(&self, request: &Request) -> Result<Reply, Reply> {
@@ -316,7 +324,8 @@ impl LabelSession {
                 409,
                 &format!(
                     "round_id {} is not the round on show ({}); reload the page",
-                    body.get("round_id").map_or("missing".into(), |v| v.to_string()),
+                    body.get("round_id")
+                        .map_or("missing".into(), |v| v.to_string()),
                     round.id
                 ),
             ));
