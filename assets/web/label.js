@@ -64,7 +64,16 @@ function draw() {
   ctx.imageSmoothingEnabled = false;
   ctx.fillStyle = "#000";
   ctx.fillRect(0, 0, view.width, view.height);
-  if (roundImage && state && state.round) {
+  if (roundImage && state && state.phase === "done") {
+    // The last round's image, dimmed: nothing left to click.
+    ctx.globalAlpha = 0.3;
+    ctx.drawImage(roundImage, 0, 0, view.width, view.height);
+    ctx.globalAlpha = 1;
+    ctx.fillStyle = "#fff";
+    ctx.font = "600 28px system-ui, sans-serif";
+    ctx.textAlign = "center";
+    ctx.fillText("Every object has its labels", view.width / 2, view.height / 2);
+  } else if (roundImage && state && state.round) {
     ctx.drawImage(roundImage, 0, 0, view.width, view.height);
     const angle = state.cursor.angle;
     if (state.cursor.centre) gripper(state.cursor.centre[0], state.cursor.centre[1], angle, 1);
@@ -149,7 +158,7 @@ async function refresh() {
   const id = s.round ? s.round.id : null;
   if (id !== roundId) {
     roundId = id;
-    roundImage = null;
+    // Between rounds (and once done) the last image stays, so the page does not flash.
     if (id !== null) {
       const img = new Image();
       img.onload = () => { if (roundId === id) { roundImage = img; draw(); } };

@@ -3,6 +3,7 @@
 //! Each module covers one area end to end: the CLI's outputs and errors, evaluation, the mesh
 //! importer, labelling, libtorch itself, physics grasps, and training.
 
+mod browser;
 mod cli;
 mod common;
 mod eval;
