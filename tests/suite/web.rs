@@ -544,3 +544,87 @@ fn a_delete_killed_at_any_step_leaves_the_old_or_the_new_dataset_and_both_pass_c
     assert!(delete(None).status.success());
     assert!(!data.join(".labels.next").exists());
 }
+
+#[test]
+fn a_scripted_dataset_is_topped_up_by_hand_and_each_label_keeps_its_source() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("split.json"),
+        r#"{"train": ["YcbTennisBall"], "test": []}"#,
+    )
+    .unwrap();
+    let label = |args: &[&str]| {
+        Command::new(BIN)
+            .arg("--data")
+            .arg(dir.path().join("data"))
+            .arg("--split")
+            .arg(dir.path().join("split.json"))
+            .arg("label")
+            .args(args)
+            .stdin(Stdio::piped())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap()
+    };
+    let scripted = label(&["--per-object", "1"]).wait_with_output().unwrap();
+    assert!(scripted.status.success(), "{scripted:?}");
+    let progress_path = dir.path().join("data/labels/progress.json");
+    let progress: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&progress_path).unwrap()).unwrap();
+    let rounds = progress["rounds"][0]["rounds"].as_u64().unwrap();
+    // The person's click for the next round, typed at the prompt.
+    let grasp = oracle_click("YcbTennisBall", rounds);
+    let mut by_hand = label(&["--per-object", "2", "--interactive"]);
+    let mut keys = format!("{} {}\n", grasp.u, grasp.v);
+    for _ in 0..(grasp.angle_deg / 22.5).round() as usize {
+        keys.push_str("d\n");
+    }
+    keys.push_str("q\n");
+    by_hand
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(keys.as_bytes())
+        .unwrap();
+    let out = by_hand.wait_with_output().unwrap();
+    assert!(out.status.success(), "{out:?}");
+    let progress: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(&progress_path).unwrap()).unwrap();
+    assert_eq!(progress["schema"], "graspmap.label-progress/2");
+    assert_eq!(
+        progress["rounds"][0]["sources"],
+        serde_json::json!(["scripted", "interactive"])
+    );
+    // Another seed is still refused: it would change every round's drop.
+    let other = label(&["--per-object", "3", "--seed", "7"])
+        .wait_with_output()
+        .unwrap();
+    assert_eq!(other.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&other.stderr).contains("--seed 0"));
+}
+
+#[test]
+fn delete_names_what_is_wrong_with_its_argument() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = |value: &str| {
+        Command::new(BIN)
+            .arg("--data")
+            .arg(dir.path())
+            .args(["label", "--delete", value])
+            .output()
+            .unwrap()
+    };
+    for (value, needle) in [
+        ("YcbHammer", "is not OBJECT:K"),
+        ("YcbHammer:0", "K counts from 1"),
+        ("YcbHammer:two", "is not OBJECT:K"),
+        ("YcbHammer:3", "YcbHammer has 0 labels"),
+    ] {
+        let out = run(value);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{value}: {stderr}");
+        assert_eq!(stderr.trim().lines().count(), 1, "{stderr}");
+        assert!(stderr.contains(needle), "{value}: {stderr}");
+    }
+}
