@@ -215,8 +215,8 @@ pub(crate) struct EvalArgs {
     #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) max_attempts: u32,
     /// Write the episode video: an oblique view beside the camera view with the chosen grasp
-    /// (one seed only).
-    #[arg(long, value_name = "GIF", conflicts_with = "seeds")]
+    /// (one seed only); .mp4 for H.264 (small, plays in browsers) or .gif.
+    #[arg(long, value_name = "VIDEO", conflicts_with = "seeds")]
     pub(crate) record: Option<PathBuf>,
     /// Arithmetic of the network.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
@@ -379,8 +379,8 @@ pub(crate) struct GraspArgs {
     /// A uniformly random pixel on bin 1's floor area and a random angle.
     #[arg(long)]
     pub(crate) random: bool,
-    /// Write an animated GIF of the attempt from an oblique view.
-    #[arg(long, value_name = "GIF")]
+    /// Write a video of the attempt from an oblique view: .mp4 (H.264) or .gif.
+    #[arg(long, value_name = "VIDEO")]
     pub(crate) record: Option<PathBuf>,
     /// Grip force per finger in newtons.
     #[arg(long, default_value_t = 40.0, value_parser = positive::<f32>)]

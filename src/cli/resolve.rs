@@ -12,6 +12,7 @@ use crate::commands::grasp::{GraspChoice, GraspConfig};
 use crate::commands::label::{ClickNoise, ClickSource, LabelConfig};
 use crate::commands::predict::PredictConfig;
 use crate::commands::train::TrainOptions;
+use crate::commands::video::VideoFormat;
 use crate::commands::Context;
 use crate::grasp::PixelGrasp;
 use crate::model::train::TrainConfig;
@@ -65,6 +66,9 @@ impl EvalArgs {
             centring: self.centring,
         };
         model.validate()?;
+        if let Some(path) = &self.record {
+            VideoFormat::of(path)?;
+        }
         let seeds = match (self.seeds, self.seed) {
             (Some(list), _) => list.0,
             (None, Some(seed)) => vec![seed],
@@ -123,6 +127,9 @@ impl GraspArgs {
             _ if self.oracle => GraspChoice::Oracle,
             _ => GraspChoice::Random,
         };
+        if let Some(path) = &self.record {
+            VideoFormat::of(path)?;
+        }
         Ok(GraspConfig {
             object: self.object,
             seed: self.seed,
