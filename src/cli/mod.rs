@@ -65,6 +65,8 @@ pub(crate) enum Command {
     Eval(EvalArgs),
     /// Run the trained model on a 128 × 128 RGB image and print its best grasp.
     Predict(PredictArgs),
+    /// Write one self-contained HTML page of the whole run (labels, training, evaluations).
+    Report(ReportArgs),
     /// Measure speed against the Python PyTorch peer.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -216,7 +218,7 @@ pub(crate) struct EvalArgs {
     pub(crate) max_attempts: u32,
     /// Write the episode video: an oblique view beside the camera view with the chosen grasp
     /// (one seed only); .mp4 for H.264 (small, plays in browsers) or .gif.
-    #[arg(long, value_name = "VIDEO", conflicts_with = "seeds")]
+    #[arg(long, value_name = "VIDEO")]
     pub(crate) record: Option<PathBuf>,
     /// Arithmetic of the network.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
@@ -245,6 +247,14 @@ pub(crate) struct PredictArgs {
     /// Arithmetic of the network.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
     pub(crate) precision: PrecisionChoice,
+}
+
+/// `graspmap report`.
+#[derive(Debug, Args)]
+pub(crate) struct ReportArgs {
+    /// The page; the files it shows go to <stem>_files/ beside it [default: DATA/report.html].
+    #[arg(long, value_name = "HTML")]
+    pub(crate) out: Option<PathBuf>,
 }
 
 /// Seeds given as a list and/or ranges.
@@ -460,6 +470,7 @@ pub fn run() -> anyhow::Result<()> {
             commands::eval::run(&context, config)
         }
         Command::Predict(args) => commands::predict::run(&context, args.config(&data)),
+        Command::Report(args) => commands::report_page::run(&context, args.config(&data)?),
         Command::Bench(BenchCommand::Train(args)) => commands::bench::run(
             &context,
             BenchConfig {
