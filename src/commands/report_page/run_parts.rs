@@ -26,11 +26,12 @@ pub(crate) fn labels_section(data_dir: &Path, files: &mut Files) -> anyhow::Resu
         return Ok(html);
     }
     let labels = store.load()?;
+    let objects = labels.iter().count();
     let _ = writeln!(
         html,
-        "<p>{} labels of {} objects in <code>{}</code>.</p>",
+        "<p>{} labels of {objects} object{} in <code>{}</code>.</p>",
         labels.len(),
-        labels.iter().count(),
+        plural(objects),
         esc(&store.labels_path().display().to_string())
     );
     html.push_str("<table><tr><th>object</th><th>labels</th></tr>\n");
@@ -81,7 +82,6 @@ pub(crate) fn labels_section(data_dir: &Path, files: &mut Files) -> anyhow::Resu
         shown += 1;
     }
     html.push_str("</div>\n");
-    let objects = labels.iter().count();
     if objects > shown {
         let _ = writeln!(
             html,
@@ -155,8 +155,10 @@ fn loss_summary(csv: &Path) -> anyhow::Result<String> {
         .min_by(|a, b| a.2.total_cmp(&b.2))
         .unwrap_or((last, train, val));
     Ok(format!(
-        "<p>{last} epochs. Last: training loss {train:.4}, validation loss {val:.4}. Best validation loss {:.4} at epoch {} (best.safetensors).</p>\n",
-        best.2, best.0
+        "<p>Trained {last} epoch{}. Last: training loss {train:.4}, validation loss {val:.4}. Best validation loss {:.4} at epoch {} (best.safetensors).</p>\n",
+        plural(last as usize),
+        best.2,
+        best.0
     ))
 }
 
@@ -176,4 +178,13 @@ fn last_training_vis(dir: &Path) -> Option<(u32, std::path::PathBuf)> {
             Some((epoch, path))
         })
         .max_by_key(|(epoch, _)| *epoch)
+}
+
+/// "s" unless there is exactly one.
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
 }
