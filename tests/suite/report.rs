@@ -104,10 +104,7 @@ fn the_report_of_a_small_run_links_only_files_it_wrote_and_names_every_eval() {
             "not relative: {url}"
         );
         assert!(url.starts_with("report_files/"), "{url}");
-        assert!(
-            target(&setup.dir.path(), url).is_file(),
-            "broken link {url}"
-        );
+        assert!(target(setup.dir.path(), url).is_file(), "broken link {url}");
     }
     for name in [
         "eval_train_model.json",

@@ -117,7 +117,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("r.html");
         let written = write_report_page(&dir.path().join("nothing"), &out).unwrap();
-        assert_eq!(written, [out.clone()]);
+        assert_eq!(written, std::slice::from_ref(&out));
         let html = std::fs::read_to_string(&out).unwrap();
         for command in ["graspmap label", "graspmap train", "graspmap eval --task"] {
             assert!(html.contains(command), "{command} missing from {html}");

@@ -44,7 +44,9 @@ pub(crate) fn save_video_atomic(
     every_steps: u64,
     path: &Path,
 ) -> anyhow::Result<()> {
-    match VideoFormat::of(path)? {
+    let started = std::time::Instant::now();
+    let format = VideoFormat::of(path)?;
+    let written = match format {
         VideoFormat::Mp4 => {
             // Ticks of the physics clock, so that every frame lasts exactly its steps.
             let ticks = u32::try_from(every_steps.max(1)).unwrap_or(u32::MAX);
@@ -56,7 +58,14 @@ pub(crate) fn save_video_atomic(
             let delay_cs = (every_steps as f32 * 100.0 / PHYSICS_HZ).round() as u32;
             save_gif_atomic(frames, delay_cs.max(1), path)
         }
-    }
+    };
+    // GRASPMAP_LOG=debug: the encoding's own share of a recording (BENCHMARKS.md).
+    tracing::debug!(
+        "{format:?}: {} frames encoded and written in {:.2} s",
+        frames.len(),
+        started.elapsed().as_secs_f64()
+    );
+    written
 }
 
 /// Writes an animated GIF atomically, `delay_cs` hundredths of a second per frame.
