@@ -192,6 +192,19 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         context.say(&format!("wrote the episode video to {}", path.display()));
     }
 
+    finish(context, &config, &names, runs, start, &evaluation.vis_dir)
+}
+
+/// Summarises a finished evaluation, prints it, and writes its report to --json and to
+/// [`kept_report_path`].
+fn finish(
+    context: &Context,
+    config: &EvalConfig,
+    names: &[String],
+    runs: Vec<SceneRun>,
+    start: Instant,
+    vis_dir: &Path,
+) -> anyhow::Result<()> {
     let drew = runs
         .iter()
         .flat_map(|r| &r.attempts)
@@ -199,24 +212,24 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
     let mut results = summarise(
         config.task,
         config.policy,
-        seeds.clone(),
-        &names,
+        config.seeds.clone(),
+        names,
         runs,
         start.elapsed().as_secs_f64(),
         false,
     );
     results.video = config.record.clone();
-    results.vis_dir = drew.then(|| evaluation.vis_dir.clone());
+    results.vis_dir = drew.then(|| vis_dir.to_path_buf());
     for line in report_lines(&results, config.suppression.remember) {
         context.say(&line);
     }
-    let resolved = resolved_config(context, &config, &names);
+    let resolved = resolved_config(context, config, names);
     // The latest finished run of each task and policy stays under DATA, beside the model, for
     // `graspmap report`; --json is the user's own copy, wherever it goes.
     let kept = kept_report_path(&context.data, config.task, config.policy);
     let targets = context.json.iter().chain(std::iter::once(&kept));
     for target in targets {
-        write_versioned_report(target, "eval", 2, seeds[0], &resolved, &results)?;
+        write_versioned_report(target, "eval", 2, config.seeds[0], &resolved, &results)?;
     }
     context.say(&format!("report kept in {}", kept.display()));
     Ok(())
