@@ -351,9 +351,18 @@ fn details(entry: &Entry, data_dir: &Path, files: &mut Files) -> anyhow::Result<
             || "where the report's attempts name them".to_string(),
             |d| format!("in <code>{}</code>", esc(&d.display().to_string())),
         );
+        let wanted = VIS_SHOWN.min(drawn.len());
+        let gone = if shown < wanted {
+            format!(
+                " {} of those chosen are no longer on disk: run the evaluation again to draw them.",
+                wanted - shown
+            )
+        } else {
+            String::new()
+        };
         let _ = writeln!(
             html,
-            "<p class=\"note\">Showing {shown} of {} attempt visualisations (each bin's rotated image and affordance map, the chosen bin framed); all of them are {folder}.</p>",
+            "<p class=\"note\">Showing {shown} of {} attempt visualisations (each bin's rotated image and affordance map, the chosen bin framed); all of them are {folder}.{gone}</p>",
             drawn.len()
         );
     }
