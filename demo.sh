@@ -17,5 +17,6 @@ if [ -f data/affordance/last.json ]; then resume=(--resume); else resume=(); fi
 "$bin" train --epochs 30 "${resume[@]}" --json "$out/train.json"
 "$bin" eval --task train --json "$out/eval_train.json"
 "$bin" eval --task test --json "$out/eval_test.json"
-"$bin" eval --task empty_bin --n_past_action 8 --record "$out/empty_bin.gif" --json "$out/eval_empty_bin.json"
-echo "pipeline done in ${SECONDS} s; reports in $out/, the empty_bin video in $out/empty_bin.gif"
+"$bin" eval --task empty_bin --n_past_action 8 --record "$out/empty_bin.mp4" --json "$out/eval_empty_bin.json"
+"$bin" report
+echo "pipeline done in ${SECONDS} s; reports in $out/, the empty_bin video in $out/empty_bin.mp4, the page in data/report.html"

@@ -65,6 +65,8 @@ pub(crate) enum Command {
     Eval(EvalArgs),
     /// Run the trained model on a 128 × 128 RGB image and print its best grasp.
     Predict(PredictArgs),
+    /// Write one self-contained HTML page of the whole run (labels, training, evaluations).
+    Report(ReportArgs),
     /// Measure speed against the Python PyTorch peer.
     #[command(subcommand)]
     Bench(BenchCommand),
@@ -215,8 +217,8 @@ pub(crate) struct EvalArgs {
     #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) max_attempts: u32,
     /// Write the episode video: an oblique view beside the camera view with the chosen grasp
-    /// (one seed only).
-    #[arg(long, value_name = "GIF", conflicts_with = "seeds")]
+    /// (one seed only); .mp4 for H.264 (small, plays in browsers) or .gif.
+    #[arg(long, value_name = "VIDEO")]
     pub(crate) record: Option<PathBuf>,
     /// Arithmetic of the network.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
@@ -245,6 +247,14 @@ pub(crate) struct PredictArgs {
     /// Arithmetic of the network.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
     pub(crate) precision: PrecisionChoice,
+}
+
+/// `graspmap report`.
+#[derive(Debug, Args)]
+pub(crate) struct ReportArgs {
+    /// The page; the files it shows go to <stem>_files/ beside it [default: DATA/report.html].
+    #[arg(long, value_name = "HTML")]
+    pub(crate) out: Option<PathBuf>,
 }
 
 /// Seeds given as a list and/or ranges.
@@ -410,8 +420,8 @@ pub(crate) struct GraspArgs {
     /// A uniformly random pixel on bin 1's floor area and a random angle.
     #[arg(long)]
     pub(crate) random: bool,
-    /// Write an animated GIF of the attempt from an oblique view.
-    #[arg(long, value_name = "GIF")]
+    /// Write a video of the attempt from an oblique view: .mp4 (H.264) or .gif.
+    #[arg(long, value_name = "VIDEO")]
     pub(crate) record: Option<PathBuf>,
     /// Grip force per finger in newtons.
     #[arg(long, default_value_t = 40.0, value_parser = positive::<f32>)]
@@ -491,6 +501,7 @@ pub fn run() -> anyhow::Result<()> {
             commands::eval::run(&context, config)
         }
         Command::Predict(args) => commands::predict::run(&context, args.config(&data)),
+        Command::Report(args) => commands::report_page::run(&context, args.config(&data)?),
         Command::Bench(BenchCommand::Train(args)) => commands::bench::run(
             &context,
             BenchConfig {

@@ -5,13 +5,15 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _};
 
-use super::{EvalArgs, GlobalArgs, GraspArgs, LabelArgs, PredictArgs, TrainArgs};
+use super::{EvalArgs, GlobalArgs, GraspArgs, LabelArgs, PredictArgs, ReportArgs, TrainArgs};
 use crate::assets::objects::{ObjectLibrary, SplitFile};
 use crate::commands::eval::EvalConfig;
 use crate::commands::grasp::{GraspChoice, GraspConfig};
 use crate::commands::label::{ClickNoise, ClickSource, LabelConfig};
 use crate::commands::predict::PredictConfig;
+use crate::commands::report_page::ReportConfig;
 use crate::commands::train::TrainOptions;
+use crate::commands::video::VideoFormat;
 use crate::commands::Context;
 use crate::grasp::PixelGrasp;
 use crate::model::train::TrainConfig;
@@ -65,11 +67,21 @@ impl EvalArgs {
             centring: self.centring,
         };
         model.validate()?;
+        if let Some(path) = &self.record {
+            VideoFormat::of(path)?;
+        }
         let seeds = match (self.seeds, self.seed) {
             (Some(list), _) => list.0,
             (None, Some(seed)) => vec![seed],
             (None, None) => vec![self.task.default_seed()],
         };
+        if let (Some(path), [_, _, ..]) = (&self.record, seeds.as_slice()) {
+            bail!(
+                "--record {} films one episode, and --seeds gives {}; record one seed (--seed S)",
+                path.display(),
+                seeds.len()
+            );
+        }
         Ok(EvalConfig {
             task: self.task,
             policy: self.policy,
@@ -123,6 +135,9 @@ impl GraspArgs {
             _ if self.oracle => GraspChoice::Oracle,
             _ => GraspChoice::Random,
         };
+        if let Some(path) = &self.record {
+            VideoFormat::of(path)?;
+        }
         Ok(GraspConfig {
             object: self.object,
             seed: self.seed,
@@ -181,5 +196,21 @@ impl TrainArgs {
             },
             resume: self.resume,
         }
+    }
+}
+
+impl ReportArgs {
+    pub(super) fn config(self, data: &Path) -> anyhow::Result<ReportConfig> {
+        let out = self.out.unwrap_or_else(|| data.join("report.html"));
+        let html = out
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("html") || e.eq_ignore_ascii_case("htm"));
+        if !html {
+            bail!(
+                "--out {}: the report is an HTML page; end the name in .html (e.g. --out report.html)",
+                out.display()
+            );
+        }
+        Ok(ReportConfig { out })
     }
 }

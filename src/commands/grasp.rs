@@ -6,7 +6,7 @@ use std::time::Instant;
 use anyhow::Context as _;
 
 use super::report::write_report;
-use super::video::save_gif_atomic;
+use super::video::save_video_atomic;
 use super::Context;
 use crate::data::atomic::save_image_atomic;
 use crate::grasp::draw::draw_grasp;
@@ -126,7 +126,7 @@ pub(crate) fn run(context: &Context, args: GraspConfig) -> anyhow::Result<()> {
     };
     if let Some(path) = &args.record {
         let frames = cell.take_recording();
-        save_gif_atomic(&frames, RECORD_DELAY_CS, path)
+        save_video_atomic(&frames, RECORD_EVERY_STEPS, path)
             .with_context(|| format!("writing --record {}", path.display()))?;
     }
     let results = GraspResults {
@@ -174,5 +174,3 @@ fn result_line(r: &GraspResults, seed: u64) -> String {
 
 /// Physics steps between recorded frames (240 Hz / 10 = 24 fps).
 pub(crate) const RECORD_EVERY_STEPS: u64 = 10;
-/// GIF frame delay in hundredths of a second, matching `RECORD_EVERY_STEPS`.
-pub(crate) const RECORD_DELAY_CS: u32 = 4;

@@ -7,6 +7,7 @@ pub mod interrupt;
 pub(crate) mod label;
 pub(crate) mod predict;
 pub(crate) mod report;
+pub(crate) mod report_page;
 pub(crate) mod scene;
 pub(crate) mod train;
 pub(crate) mod video;

@@ -7,12 +7,12 @@ use serde_json::Value;
 
 /// A data directory with an untrained (seeded) MiniUNet checkpoint and a split of one training
 /// and one test object, so that a whole task is 3 attempts.
-struct Setup {
-    dir: tempfile::TempDir,
+pub(crate) struct Setup {
+    pub(crate) dir: tempfile::TempDir,
 }
 
 impl Setup {
-    fn new() -> Self {
+    pub(crate) fn new() -> Self {
         let dir = tempfile::tempdir().unwrap();
         std::fs::write(
             dir.path().join("split.json"),
@@ -29,12 +29,12 @@ impl Setup {
         Self { dir }
     }
 
-    fn path(&self, name: &str) -> PathBuf {
+    pub(crate) fn path(&self, name: &str) -> PathBuf {
         self.dir.path().join(name)
     }
 
     /// Runs graspmap with this data directory and split.
-    fn run(&self, args: &[&str]) -> std::process::Output {
+    pub(crate) fn run(&self, args: &[&str]) -> std::process::Output {
         let data = self.dir.path().to_str().unwrap().to_owned();
         let split = self.path("split.json").to_str().unwrap().to_owned();
         let mut all = vec!["--data", &data, "--split", &split, "--threads", "2"];
@@ -43,7 +43,7 @@ impl Setup {
     }
 
     /// The oracle emptying the default scene in at most `attempts` attempts, plus `extra`.
-    fn oracle_empty_bin(&self, attempts: u32, extra: &[&str]) -> std::process::Output {
+    pub(crate) fn oracle_empty_bin(&self, attempts: u32, extra: &[&str]) -> std::process::Output {
         let attempts = attempts.to_string();
         let mut args = vec![
             "eval",
@@ -59,7 +59,7 @@ impl Setup {
     }
 }
 
-fn read_json(path: &Path) -> Value {
+pub(crate) fn read_json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 

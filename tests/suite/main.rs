@@ -1,7 +1,7 @@
 //! The integration tests, built into one binary so that libtorch and rapier are linked once.
 //!
 //! Each module covers one area end to end: the CLI's outputs and errors, evaluation, the mesh
-//! importer, labelling, libtorch itself, physics grasps, and training.
+//! importer, labelling, libtorch itself, physics grasps, training, the run report and videos, and the web pages (over HTTP and in a browser).
 
 mod browser;
 mod cli;
@@ -11,5 +11,7 @@ mod importer;
 mod label;
 mod libtorch;
 mod physics;
+mod report;
 mod train;
+mod video;
 mod web;

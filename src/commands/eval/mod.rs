@@ -12,7 +12,7 @@ use image::RgbImage;
 
 use super::interrupt;
 use super::report::write_versioned_report;
-use super::video::save_gif_atomic;
+use super::video::save_video_atomic;
 use super::Context;
 use crate::assets::objects::ObjectModel;
 use crate::data::atomic::save_image_atomic;
@@ -34,10 +34,8 @@ pub(crate) const ATTEMPTS_PER_OBJECT: u32 = 3;
 /// Offset of the train/test drop seeds (the reference's): seed + 100·i + a + 10000.
 pub(crate) const SINGLE_OBJECT_SEED_OFFSET: u64 = 10_000;
 /// Physics steps between episode video frames: 10 fps, so that a 25-attempt episode stays
-/// near 15 MB (`grasp --record` films one attempt at 24 fps).
+/// near 3 MB as MP4 (about 19 MB as GIF); `grasp --record` films one attempt at 24 fps.
 pub(crate) const EPISODE_EVERY_STEPS: u64 = 24;
-/// GIF frame delay matching [`EPISODE_EVERY_STEPS`] at 240 Hz, in hundredths of a second.
-pub(crate) const EPISODE_DELAY_CS: u32 = 10;
 /// The default empty_bin scene (the reference's).
 pub(crate) const DEFAULT_EMPTY_BIN_SEED: u64 = 2;
 
@@ -189,34 +187,58 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         ));
     }
     if let (Some(path), Some(frames)) = (&config.record, &evaluation.recording) {
-        save_gif_atomic(frames, EPISODE_DELAY_CS, path)
+        save_video_atomic(frames, EPISODE_EVERY_STEPS, path)
             .with_context(|| format!("writing --record {}", path.display()))?;
         context.say(&format!("wrote the episode video to {}", path.display()));
     }
 
-    let results = summarise(
+    finish(context, &config, &names, runs, start, &evaluation.vis_dir)
+}
+
+/// Summarises a finished evaluation, prints it, and writes its report to --json and to
+/// [`kept_report_path`].
+fn finish(
+    context: &Context,
+    config: &EvalConfig,
+    names: &[String],
+    runs: Vec<SceneRun>,
+    start: Instant,
+    vis_dir: &Path,
+) -> anyhow::Result<()> {
+    let drew = runs
+        .iter()
+        .flat_map(|r| &r.attempts)
+        .any(|a| a.vis.is_some());
+    let mut results = summarise(
         config.task,
         config.policy,
-        seeds.clone(),
-        &names,
+        config.seeds.clone(),
+        names,
         runs,
         start.elapsed().as_secs_f64(),
         false,
     );
+    results.video = config.record.clone();
+    results.vis_dir = drew.then(|| vis_dir.to_path_buf());
     for line in report_lines(&results, config.suppression.remember) {
         context.say(&line);
     }
-    if let Some(json) = &context.json {
-        write_versioned_report(
-            json,
-            "eval",
-            2,
-            seeds[0],
-            &resolved_config(context, &config, &names),
-            &results,
-        )?;
+    let resolved = resolved_config(context, config, names);
+    // The latest finished run of each task and policy stays under DATA, beside the model, for
+    // `graspmap report`; --json is the user's own copy, wherever it goes.
+    let kept = kept_report_path(&context.data, config.task, config.policy);
+    let targets = context.json.iter().chain(std::iter::once(&kept));
+    for target in targets {
+        write_versioned_report(target, "eval", 2, config.seeds[0], &resolved, &results)?;
     }
+    context.say(&format!("report kept in {}", kept.display()));
     Ok(())
+}
+
+/// Where `eval` keeps its latest report of `task` and `policy`: `DATA/reports/eval_<task>_<policy>.json`.
+pub(crate) fn kept_report_path(data: &Path, task: Task, policy: PolicyKind) -> PathBuf {
+    data.join("reports")
+        .join(format!("eval_{}_{}.json", task.name(), policy.name()))
 }
 
 /// Writes the report of an interrupted sweep (the scenes finished so far) and says how to

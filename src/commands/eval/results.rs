@@ -1,5 +1,5 @@
 //! What an evaluation reports: the attempt records, per-object and per-scene tables, Wilson
-//! intervals and timings, as JSON (`graspmap.eval/1`) and as printed lines.
+//! intervals and timings, as JSON (`graspmap.eval/2`) and as printed lines.
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -109,6 +109,10 @@ pub(crate) struct EvalResults {
     pub(crate) timing: TimingSummary,
     /// A signal stopped the run: `runs` holds the scenes finished before it (schema version 2).
     pub(crate) interrupted: bool,
+    /// The episode video that `--record` wrote, as given.
+    pub(crate) video: Option<PathBuf>,
+    /// The folder of the per-attempt visualisations, when the policy drew any.
+    pub(crate) vis_dir: Option<PathBuf>,
 }
 
 /// The report of a whole evaluation from its scenes.
@@ -178,6 +182,8 @@ pub(super) fn summarise(
         },
         runs,
         interrupted,
+        video: None,
+        vis_dir: None,
     }
 }
 

@@ -1,0 +1,475 @@
+//! The report's evaluation section: every report `eval` kept under DATA/reports, grouped by task,
+//! the model beside its baselines, then each report's table, visualisations and video.
+
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use serde::Deserialize;
+
+use super::files::Files;
+use super::{esc, missing};
+use crate::commands::eval::{PolicyKind, Task};
+use crate::named::Named;
+
+/// Per-attempt visualisations shown per report; the rest stay in their folder.
+const VIS_SHOWN: usize = 6;
+
+/// The parts of a `graspmap.eval/2` report the page shows (other fields are ignored).
+#[derive(Debug, Deserialize)]
+struct Kept {
+    schema: String,
+    #[serde(default)]
+    git_commit: String,
+    config: KeptConfig,
+    results: KeptResults,
+}
+
+#[derive(Debug, Deserialize)]
+struct KeptConfig {
+    global: KeptGlobal,
+    #[serde(default)]
+    record: Option<PathBuf>,
+}
+
+#[derive(Debug, Deserialize)]
+struct KeptGlobal {
+    data: PathBuf,
+}
+
+#[derive(Debug, Deserialize)]
+struct KeptResults {
+    task: String,
+    policy: String,
+    seeds: Vec<u64>,
+    success: KeptRate,
+    #[serde(default)]
+    per_object: Vec<KeptObject>,
+    #[serde(default)]
+    moved: Option<KeptSpread>,
+    #[serde(default)]
+    lost: Option<KeptSpread>,
+    runs: Vec<KeptRun>,
+    #[serde(default)]
+    interrupted: bool,
+    #[serde(default)]
+    video: Option<PathBuf>,
+    #[serde(default)]
+    vis_dir: Option<PathBuf>,
+}
+
+#[derive(Debug, Deserialize)]
+struct KeptRate {
+    successes: usize,
+    trials: usize,
+    rate: f64,
+    wilson_low: f64,
+    wilson_high: f64,
+}
+
+#[derive(Debug, Deserialize)]
+struct KeptSpread {
+    mean: f64,
+    std: f64,
+    min: f64,
+    max: f64,
+}
+
+#[derive(Debug, Deserialize)]
+struct KeptObject {
+    object: String,
+    attempts: usize,
+    successes: usize,
+    failures: BTreeMap<String, usize>,
+}
+
+#[derive(Debug, Deserialize)]
+struct KeptRun {
+    seed: u64,
+    attempts: Vec<KeptAttempt>,
+    #[serde(default)]
+    bin: Option<KeptBin>,
+}
+
+#[derive(Debug, Deserialize)]
+struct KeptAttempt {
+    attempt: u32,
+    #[serde(default)]
+    object: Option<String>,
+    success: bool,
+    reason: String,
+    #[serde(default)]
+    vis: Option<PathBuf>,
+}
+
+#[derive(Debug, Deserialize)]
+struct KeptBin {
+    moved: usize,
+    left: usize,
+    lost: usize,
+}
+
+/// One kept report, read and checked.
+struct Entry {
+    path: PathBuf,
+    file_name: String,
+    task: Task,
+    policy: PolicyKind,
+    report: Kept,
+}
+
+/// Reads every `eval_*.json` under `DATA/reports`, in name order.
+fn read_kept(dir: &Path) -> anyhow::Result<Vec<Entry>> {
+    let Ok(listing) = std::fs::read_dir(dir) else {
+        return Ok(Vec::new());
+    };
+    let mut paths: Vec<PathBuf> = listing
+        .filter_map(Result::ok)
+        .map(|e| e.path())
+        .filter(|p| {
+            p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with("eval_") && n.ends_with(".json"))
+        })
+        .collect();
+    paths.sort();
+    paths.into_iter().map(|path| read_one(&path)).collect()
+}
+
+fn read_one(path: &Path) -> anyhow::Result<Entry> {
+    let fix = "delete it, or run that evaluation again";
+    let text = std::fs::read_to_string(path)
+        .with_context(|| format!("reading the eval report {}", path.display()))?;
+    let report: Kept = serde_json::from_str(&text).map_err(|e| {
+        anyhow::anyhow!(
+            "{} is not a graspmap eval report ({e}); {fix}",
+            path.display()
+        )
+    })?;
+    let unknown = |what: &str, name: &str| {
+        anyhow::anyhow!("{}: unknown {what} '{name}'; {fix}", path.display())
+    };
+    if !matches!(
+        report.schema.as_str(),
+        "graspmap.eval/1" | "graspmap.eval/2"
+    ) {
+        return Err(unknown("schema", &report.schema));
+    }
+    let r = &report.results;
+    let task = Task::ALL
+        .iter()
+        .copied()
+        .find(|t| t.name() == r.task)
+        .ok_or_else(|| unknown("task", &r.task))?;
+    let policy = PolicyKind::ALL
+        .iter()
+        .copied()
+        .find(|p| p.name() == r.policy)
+        .ok_or_else(|| unknown("policy", &r.policy))?;
+    Ok(Entry {
+        path: path.to_path_buf(),
+        file_name: path
+            .file_name()
+            .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
+        task,
+        policy,
+        report,
+    })
+}
+
+/// Where a path that a report recorded lies now: as recorded, or rebased from the data directory
+/// the evaluation ran with onto the one this report reads.
+fn locate(recorded: &Path, run_data: &Path, data_dir: &Path) -> Option<PathBuf> {
+    if recorded.is_file() {
+        return Some(recorded.to_path_buf());
+    }
+    let rebased = data_dir.join(recorded.strip_prefix(run_data).ok()?);
+    rebased.is_file().then_some(rebased)
+}
+
+/// The whole section.
+pub(crate) fn evals_section(data_dir: &Path, files: &mut Files) -> anyhow::Result<String> {
+    let mut html = String::from("<h2>Evaluations</h2>\n");
+    let entries = read_kept(&data_dir.join("reports"))?;
+    if entries.is_empty() {
+        html.push_str(&missing(
+            "No evaluation yet",
+            "graspmap eval --task train (then --task test, --task empty_bin, and --policy random or oracle for the baselines)",
+        ));
+        return Ok(html);
+    }
+    for &task in Task::ALL {
+        let mut mine: Vec<&Entry> = entries.iter().filter(|e| e.task == task).collect();
+        if mine.is_empty() {
+            html.push_str(&missing(
+                &format!("No {} evaluation yet", task.name()),
+                &format!("graspmap eval --task {}", task.name()),
+            ));
+            continue;
+        }
+        mine.sort_by_key(|e| PolicyKind::ALL.iter().position(|&p| p == e.policy));
+        let _ = writeln!(html, "<h3>Task {}</h3>", esc(task.name()));
+        html.push_str(&comparison(task, &mine, files)?);
+        for entry in mine {
+            html.push_str(&details(entry, data_dir, files)?);
+        }
+    }
+    Ok(html)
+}
+
+/// The policies side by side: success with its Wilson interval (and empty_bin's objects moved).
+fn comparison(task: Task, entries: &[&Entry], files: &mut Files) -> anyhow::Result<String> {
+    let bin = task == Task::EmptyBin;
+    let mut html = String::from(
+        "<table><tr><th>policy</th><th>seeds</th><th>pick success</th><th>95 % Wilson interval</th>",
+    );
+    if bin {
+        html.push_str("<th>objects moved per scene</th><th>lost</th>");
+    }
+    html.push_str("<th>report</th><th>commit</th></tr>\n");
+    for entry in entries {
+        let r = &entry.report.results;
+        let s = &r.success;
+        let link = files.copy(&entry.path, &format!("reports/{}", entry.file_name))?;
+        let class = if entry.policy == PolicyKind::Model {
+            " class=\"model\""
+        } else {
+            ""
+        };
+        let seeds: Vec<String> = r.seeds.iter().map(u64::to_string).collect();
+        let _ = write!(
+            html,
+            "<tr{class}><td>{}</td><td>{}</td><td class=\"num\">{}/{} = {:.1} %</td><td class=\"num\">{:.1}–{:.1} %</td>",
+            esc(entry.policy.name()),
+            esc(&seeds.join(", ")),
+            s.successes,
+            s.trials,
+            100.0 * s.rate,
+            100.0 * s.wilson_low,
+            100.0 * s.wilson_high
+        );
+        if bin {
+            let spread = |s: &Option<KeptSpread>| {
+                s.as_ref().map_or("–".into(), |s| {
+                    format!("{:.1} ± {:.1} ({}–{})", s.mean, s.std, s.min, s.max)
+                })
+            };
+            let _ = write!(
+                html,
+                "<td class=\"num\">{}</td><td class=\"num\">{}</td>",
+                spread(&r.moved),
+                r.lost
+                    .as_ref()
+                    .map_or("–".into(), |l| format!("{:.1}", l.mean))
+            );
+        }
+        let interrupted = if r.interrupted { " (interrupted)" } else { "" };
+        let _ = writeln!(
+            html,
+            "<td><a href=\"{}\">{}</a>{interrupted}</td><td><code>{}</code></td></tr>",
+            esc(&link),
+            esc(&entry.file_name),
+            esc(&entry.report.git_commit)
+        );
+    }
+    html.push_str("</table>\n");
+    let absent: Vec<&str> = PolicyKind::ALL
+        .iter()
+        .filter(|p| !entries.iter().any(|e| e.policy == **p))
+        .map(|p| p.name())
+        .collect();
+    for policy in absent {
+        html.push_str(&missing(
+            &format!("No {policy} run of {} yet", task.name()),
+            &format!("graspmap eval --task {} --policy {policy}", task.name()),
+        ));
+    }
+    Ok(html)
+}
+
+/// One report's own table, its visualisations (capped) and its video.
+fn details(entry: &Entry, data_dir: &Path, files: &mut Files) -> anyhow::Result<String> {
+    let r = &entry.report.results;
+    let mut html = format!(
+        "<h4>{} policy, <code>{}</code></h4>\n",
+        esc(entry.policy.name()),
+        esc(&entry.path.display().to_string())
+    );
+    html.push_str(&if entry.task == Task::EmptyBin {
+        scene_table(&r.runs)
+    } else {
+        object_table(&r.per_object)
+    });
+    let run_data = &entry.report.config.global.data;
+    let dir = format!("{}_{}", entry.task.name(), entry.policy.name());
+    let drawn: Vec<(&KeptRun, &KeptAttempt, &PathBuf)> = r
+        .runs
+        .iter()
+        .flat_map(|run| run.attempts.iter().map(move |a| (run, a)))
+        .filter_map(|(run, a)| a.vis.as_ref().map(|v| (run, a, v)))
+        .collect();
+    if !drawn.is_empty() {
+        html.push_str("<div class=\"gallery\">\n");
+        let mut shown = 0;
+        // Spread over the whole run rather than the first few attempts of the first object.
+        let picks =
+            (0..VIS_SHOWN.min(drawn.len())).map(|k| k * drawn.len() / VIS_SHOWN.min(drawn.len()));
+        for (run, attempt, vis) in picks.map(|i| drawn[i]) {
+            let Some(found) = locate(vis, run_data, data_dir) else {
+                continue;
+            };
+            let name = found
+                .file_name()
+                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+            let prefix = format!("seed{}_", run.seed);
+            let name = if name.starts_with(&prefix) {
+                name
+            } else {
+                prefix + &name
+            };
+            let link = files.copy(&found, &format!("{dir}/{name}"))?;
+            let what = attempt.object.as_deref().unwrap_or("scene");
+            let outcome = if attempt.success {
+                "success"
+            } else {
+                attempt.reason.as_str()
+            };
+            let _ = writeln!(
+                html,
+                "<figure><img src=\"{}\" width=\"256\" height=\"256\" alt=\"attempt visualisation\"><figcaption>seed {}, {} attempt {}: {}</figcaption></figure>",
+                esc(&link),
+                run.seed,
+                esc(what),
+                attempt.attempt,
+                esc(outcome)
+            );
+            shown += 1;
+        }
+        html.push_str("</div>\n");
+        let folder = r.vis_dir.as_ref().map_or_else(
+            || "where the report's attempts name them".to_string(),
+            |d| format!("in <code>{}</code>", esc(&d.display().to_string())),
+        );
+        let wanted = VIS_SHOWN.min(drawn.len());
+        let gone = if shown < wanted {
+            format!(
+                " {} of those chosen are no longer on disk: run the evaluation again to draw them.",
+                wanted - shown
+            )
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            html,
+            "<p class=\"note\">Showing {shown} of {} attempt visualisations (each bin's rotated image and affordance map, the chosen bin framed); all of them are {folder}.{gone}</p>",
+            drawn.len()
+        );
+    }
+    html.push_str(&video(entry, data_dir, &dir, files)?);
+    Ok(html)
+}
+
+/// The episode video, if the evaluation recorded one: `<video>` for MP4, `<img>` for GIF.
+fn video(entry: &Entry, data_dir: &Path, dir: &str, files: &mut Files) -> anyhow::Result<String> {
+    let recorded = entry
+        .report
+        .results
+        .video
+        .as_ref()
+        .or(entry.report.config.record.as_ref());
+    let Some(recorded) = recorded else {
+        return Ok(if entry.task == Task::EmptyBin {
+            missing(
+                "No episode video of this run",
+                &format!(
+                    "graspmap eval --task empty_bin --policy {} --record episode.mp4",
+                    entry.policy.name()
+                ),
+            )
+        } else {
+            String::new()
+        });
+    };
+    let Some(found) = locate(recorded, &entry.report.config.global.data, data_dir) else {
+        return Ok(format!(
+            "<p class=\"missing\">The episode video {} is gone: rerun the evaluation with <code>--record</code>.</p>\n",
+            esc(&recorded.display().to_string())
+        ));
+    };
+    let gif = found
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gif"));
+    let link = files.copy(
+        &found,
+        &format!("{dir}/episode.{}", if gif { "gif" } else { "mp4" }),
+    )?;
+    Ok(if gif {
+        format!(
+            "<p><img class=\"video\" src=\"{}\" alt=\"episode video\"></p>\n",
+            esc(&link)
+        )
+    } else {
+        format!(
+            "<p><video controls preload=\"metadata\" src=\"{}\">episode video (H.264 MP4)</video></p>\n",
+            esc(&link)
+        )
+    })
+}
+
+/// train/test: attempts, successes and failure reasons per object.
+fn object_table(rows: &[KeptObject]) -> String {
+    let mut html = String::from(
+        "<table><tr><th>object</th><th>attempts</th><th>successes</th><th>failures</th></tr>\n",
+    );
+    for o in rows {
+        let _ = writeln!(
+            html,
+            "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td>{}</td></tr>",
+            esc(&o.object),
+            o.attempts,
+            o.successes,
+            esc(&tally(&o.failures))
+        );
+    }
+    html.push_str("</table>\n");
+    html
+}
+
+/// empty_bin: attempts, successes, moved, left and lost per scene.
+fn scene_table(runs: &[KeptRun]) -> String {
+    let mut html = String::from(
+        "<table><tr><th>seed</th><th>attempts</th><th>successes</th><th>moved</th><th>left</th><th>lost</th><th>failures</th></tr>\n",
+    );
+    for run in runs {
+        let mut failures = BTreeMap::new();
+        for a in run.attempts.iter().filter(|a| !a.success) {
+            *failures.entry(a.reason.clone()).or_insert(0) += 1;
+        }
+        let (moved, left, lost) = run
+            .bin
+            .as_ref()
+            .map_or((0, 0, 0), |b| (b.moved, b.left, b.lost));
+        let _ = writeln!(
+            html,
+            "<tr><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{moved}</td><td class=\"num\">{left}</td><td class=\"num\">{lost}</td><td>{}</td></tr>",
+            run.seed,
+            run.attempts.len(),
+            run.attempts.iter().filter(|a| a.success).count(),
+            esc(&tally(&failures))
+        );
+    }
+    html.push_str("</table>\n");
+    html
+}
+
+fn tally(failures: &BTreeMap<String, usize>) -> String {
+    if failures.is_empty() {
+        return "–".into();
+    }
+    failures
+        .iter()
+        .map(|(reason, n)| format!("{reason} ×{n}"))
+        .collect::<Vec<_>>()
+        .join(", ")
+}

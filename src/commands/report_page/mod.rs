@@ -1,0 +1,127 @@
+//! `graspmap report`: one self-contained HTML page for a whole run (labels, training, every kept
+//! evaluation with its baselines, visualisations and video), written beside a folder of the
+//! files it shows and linked relatively, so that the pair opens offline and travels as a zip.
+//!
+//! [`write_report_page`] is the one entry point; `report --serve` calls it too.
+
+mod evals;
+mod files;
+mod run_parts;
+
+use std::path::{Path, PathBuf};
+
+use super::report::write_report;
+use super::Context;
+use files::Files;
+
+/// The page's frame and style, embedded in the binary (no CDN, no script).
+const TEMPLATE: &str = include_str!("page.html");
+
+/// Everything one `graspmap report` run needs, resolved by the CLI.
+#[derive(Debug, Clone, serde::Serialize)]
+pub(crate) struct ReportConfig {
+    /// Where the page goes; its files go to `<stem>_files/` beside it.
+    pub(crate) out: PathBuf,
+}
+
+/// Runs the command.
+pub(crate) fn run(context: &Context, config: ReportConfig) -> anyhow::Result<()> {
+    let written = write_report_page(&context.data, &config.out)?;
+    context.say(&format!(
+        "wrote {} and {} files in {}",
+        config.out.display(),
+        written.len() - 1,
+        files::files_dir(&config.out).display()
+    ));
+    if let Some(json) = &context.json {
+        write_report(
+            json,
+            "report",
+            0,
+            &serde_json::json!({ "global": context, "out": config.out }),
+            &serde_json::json!({ "page": config.out, "files": &written[1..] }),
+        )?;
+    }
+    Ok(())
+}
+
+/// Writes the report of the run under `data_dir` to `out_html`, and the files it shows to
+/// `<stem>_files/` beside it (only relative links between them). Returns the page's path first,
+/// then every file written. Parts of the run that do not exist yet appear as a line naming the
+/// command that makes them; a corrupt labels file or eval report is an error naming it.
+pub(crate) fn write_report_page(data_dir: &Path, out_html: &Path) -> anyhow::Result<Vec<PathBuf>> {
+    if out_html.is_dir() {
+        anyhow::bail!(
+            "{} is a directory; give the page's file name, e.g. {}",
+            out_html.display(),
+            out_html.join("report.html").display()
+        );
+    }
+    let mut files = Files::new(out_html);
+    let mut body = String::new();
+    body.push_str(&run_parts::labels_section(data_dir, &mut files)?);
+    body.push_str(&run_parts::training_section(data_dir, &mut files)?);
+    body.push_str(&evals::evals_section(data_dir, &mut files)?);
+    let meta = format!(
+        "Data directory <code>{}</code>; graspmap {} (commit {}).",
+        esc(&data_dir.display().to_string()),
+        env!("CARGO_PKG_VERSION"),
+        env!("GRASPMAP_GIT_COMMIT")
+    );
+    let html = TEMPLATE
+        .replace("{{title}}", "graspmap run report")
+        .replace("{{meta}}", &meta)
+        .replace("{{body}}", &body);
+    files.finish(&html)
+}
+
+/// Escapes text for HTML content and attribute values.
+pub(crate) fn esc(text: &str) -> String {
+    let mut out = String::with_capacity(text.len());
+    for c in text.chars() {
+        match c {
+            '&' => out.push_str("&amp;"),
+            '<' => out.push_str("&lt;"),
+            '>' => out.push_str("&gt;"),
+            '"' => out.push_str("&quot;"),
+            '\'' => out.push_str("&#39;"),
+            c => out.push(c),
+        }
+    }
+    out
+}
+
+/// A line saying what is missing and which command makes it.
+pub(crate) fn missing(what: &str, command: &str) -> String {
+    format!(
+        "<p class=\"missing\">{}: run <code>{}</code>.</p>\n",
+        esc(what),
+        esc(command)
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn escaping_covers_markup_and_quotes() {
+        assert_eq!(
+            esc("<a href=\"x\">'&'</a>"),
+            "&lt;a href=&quot;x&quot;&gt;&#39;&amp;&#39;&lt;/a&gt;"
+        );
+    }
+
+    #[test]
+    fn an_empty_data_directory_gives_a_page_of_missing_parts() {
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("r.html");
+        let written = write_report_page(&dir.path().join("nothing"), &out).unwrap();
+        assert_eq!(written, std::slice::from_ref(&out));
+        let html = std::fs::read_to_string(&out).unwrap();
+        for command in ["graspmap label", "graspmap train", "graspmap eval --task"] {
+            assert!(html.contains(command), "{command} missing from {html}");
+        }
+        assert!(!html.contains("{{"), "a placeholder is left");
+    }
+}
