@@ -255,6 +255,16 @@ pub(crate) struct ReportArgs {
     /// The page; the files it shows go to <stem>_files/ beside it [default: DATA/report.html].
     #[arg(long, value_name = "HTML")]
     pub(crate) out: Option<PathBuf>,
+    /// Then serve the report at /report and the labels page at /labels (deletes included)
+    /// until Ctrl-C, without labelling.
+    #[arg(long)]
+    pub(crate) serve: bool,
+    /// --serve: the port (0 picks a free one and prints it).
+    #[arg(long, default_value_t = 8000, requires = "serve")]
+    pub(crate) port: u16,
+    /// --serve: the address to bind; anything but loopback prints a warning.
+    #[arg(long, default_value = "127.0.0.1", requires = "serve")]
+    pub(crate) host: std::net::IpAddr,
 }
 
 /// Seeds given as a list and/or ranges.
@@ -475,10 +485,13 @@ pub fn run() -> anyhow::Result<()> {
     init_logging(cli.global.quiet);
     // The long writers stop at a safe point on the first Ctrl-C; the other commands keep the
     // default, which ends them at once.
-    if matches!(
-        cli.command,
-        Command::Label(_) | Command::Train(_) | Command::Eval(_)
-    ) {
+    let serves_report = matches!(&cli.command, Command::Report(report) if report.serve);
+    if serves_report
+        || matches!(
+            cli.command,
+            Command::Label(_) | Command::Train(_) | Command::Eval(_)
+        )
+    {
         commands::interrupt::install().context("installing the Ctrl-C handler")?;
     }
     let context = cli.global.context()?;

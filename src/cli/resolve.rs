@@ -211,6 +211,9 @@ impl ReportArgs {
                 out.display()
             );
         }
-        Ok(ReportConfig { out })
+        Ok(ReportConfig {
+            out,
+            serve: self.serve.then_some((self.host, self.port)),
+        })
     }
 }

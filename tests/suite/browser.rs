@@ -308,7 +308,6 @@ async fn a_person_labels_a_small_dataset_in_the_browser_with_mouse_and_keys_only
         serde_json::to_vec_pretty(&summary).unwrap(),
     )
     .unwrap();
-    client.close().await.unwrap();
 
     // The dataset passes --check and trains.
     let run = |args: &[&str]| {
@@ -326,4 +325,93 @@ async fn a_person_labels_a_small_dataset_in_the_browser_with_mouse_and_keys_only
     let train = run(&["train", "--epochs", "1"]);
     assert!(train.status.success(), "{train:?}");
     assert!(web.data().join("affordance/best.safetensors").exists());
+
+    // The run's report opens offline, with every image and the video in place.
+    let video = web.data().join("episode.mp4");
+    let eval = run(&[
+        "eval",
+        "--task",
+        "train",
+        "--record",
+        video.to_str().unwrap(),
+    ]);
+    assert!(eval.status.success(), "{eval:?}");
+    let report = run(&["report"]);
+    assert!(report.status.success(), "{report:?}");
+    check_report(&client, &web.data().join("report.html")).await;
+    client.close().await.unwrap();
+}
+
+/// The browser's console, through chromedriver's log endpoint (W3C WebDriver has none).
+#[derive(Debug)]
+struct BrowserLog;
+
+impl fantoccini::wd::WebDriverCompatibleCommand for BrowserLog {
+    fn endpoint(
+        &self,
+        base: &url::Url,
+        session: Option<&str>,
+    ) -> Result<url::Url, url::ParseError> {
+        base.join(&format!("session/{}/se/log", session.unwrap_or_default()))
+    }
+
+    fn method_and_body(&self, _: &url::Url) -> (http::Method, Option<String>) {
+        (http::Method::POST, Some(r#"{"type": "browser"}"#.into()))
+    }
+}
+
+/// Loads report.html from disk and fails on any console error, any image that did not load,
+/// or a video the browser cannot play.
+async fn check_report(client: &Client, page: &Path) {
+    // Only this page's messages count: the log hands each entry out once.
+    client.issue_cmd(BrowserLog).await.unwrap();
+    client
+        .goto(&format!("file://{}", page.display()))
+        .await
+        .unwrap();
+    let broken = client
+        .execute(
+            "return Array.from(document.images).filter(i => !(i.complete && i.naturalWidth > 0)).map(i => i.src);",
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert_eq!(broken, serde_json::json!([]), "images that did not load");
+    let images = client
+        .execute("return document.images.length;", vec![])
+        .await
+        .unwrap();
+    assert!(images.as_u64().unwrap() >= 5, "{images}");
+    let video = client
+        .execute_async(
+            r#"const done = arguments[arguments.length - 1];
+               const v = document.querySelector("video");
+               if (!v) { done({ missing: true }); return; }
+               const report = () => done({ duration: v.duration, width: v.videoWidth, error: v.error && v.error.code });
+               if (v.readyState >= 1) { report(); return; }
+               v.addEventListener("loadedmetadata", report);
+               v.addEventListener("error", report);
+               v.load();"#,
+            vec![],
+        )
+        .await
+        .unwrap();
+    assert!(
+        video["duration"].as_f64().unwrap_or(0.0) > 0.5 && video["width"].as_u64().unwrap_or(0) > 0,
+        "the episode video does not play in Chromium: {video}"
+    );
+    std::fs::write(
+        out_dir().join("report.png"),
+        client.screenshot().await.unwrap(),
+    )
+    .unwrap();
+    let log = client.issue_cmd(BrowserLog).await.unwrap();
+    let errors: Vec<&serde_json::Value> = log
+        .as_array()
+        .map(|entries| entries.iter().filter(|e| e["level"] == "SEVERE").collect())
+        .unwrap_or_default();
+    assert!(
+        errors.is_empty(),
+        "console errors on the report: {errors:?}"
+    );
 }

@@ -7,6 +7,7 @@ use super::{labels_in, lock, ObjectJob, ObjectSummary, Shared};
 use crate::assets::objects::ObjectModel;
 use crate::commands::interrupt;
 use crate::commands::web::labels_page::{self, LabelsAccess};
+use crate::commands::web::report_route::ReportRoute;
 use crate::commands::web::session::LabelSession;
 use crate::commands::web::{Reply, Request, WebServer};
 use crate::data::labels::{LabelStore, Labels, Progress};
@@ -82,10 +83,15 @@ impl ObjectJob<'_> {
         };
         let page = |request: &Request| session.answer(request, &dataset);
         let labels = |request: &Request| labels_page::answer(&access, request);
+        let report = ReportRoute {
+            data: self.context.data.clone(),
+            out: self.context.data.join("report.html"),
+        };
+        let report = |request: &Request| report.answer(request);
         let done = std::sync::atomic::AtomicBool::new(false);
         std::thread::scope(|scope| {
             scope.spawn(|| {
-                server.serve(&[&page, &labels], &|| {
+                server.serve(&[&page, &labels, &report], &|| {
                     done.load(std::sync::atomic::Ordering::SeqCst)
                 })
             });

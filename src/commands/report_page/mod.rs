@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 
 use super::report::write_report;
 use super::Context;
+pub(crate) use files::files_dir;
 use files::Files;
 
 /// The page's frame and style, embedded in the binary (no CDN, no script).
@@ -22,6 +23,8 @@ const TEMPLATE: &str = include_str!("page.html");
 pub(crate) struct ReportConfig {
     /// Where the page goes; its files go to `<stem>_files/` beside it.
     pub(crate) out: PathBuf,
+    /// `--serve`: serve the report and the labels page on this address until Ctrl-C.
+    pub(crate) serve: Option<(std::net::IpAddr, u16)>,
 }
 
 /// Runs the command.
@@ -41,6 +44,9 @@ pub(crate) fn run(context: &Context, config: ReportConfig) -> anyhow::Result<()>
             &serde_json::json!({ "global": context, "out": config.out }),
             &serde_json::json!({ "page": config.out, "files": &written[1..] }),
         )?;
+    }
+    if let Some((host, port)) = config.serve {
+        return super::web::serve_report(context, &config.out, host, port);
     }
     Ok(())
 }

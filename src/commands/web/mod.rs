@@ -10,6 +10,7 @@
 //! The pages are plain HTML, CSS and JavaScript embedded in the binary.
 
 pub(crate) mod labels_page;
+pub(crate) mod report_route;
 pub(crate) mod session;
 
 use std::io::Read;
@@ -17,6 +18,46 @@ use std::net::{IpAddr, SocketAddr};
 use std::time::Duration;
 
 use anyhow::Context as _;
+
+/// `report --serve`: the report at `/report` (and `/`), the labels page at `/labels`, until
+/// Ctrl-C. Deleting a label takes the labels' writer lock for its duration.
+pub(crate) fn serve_report(
+    context: &crate::commands::Context,
+    out: &std::path::Path,
+    host: IpAddr,
+    port: u16,
+) -> anyhow::Result<()> {
+    let server = WebServer::bind(host, port)?;
+    let url = server.url();
+    context.say(&format!(
+        "report at {url}report, labels at {url}labels (Ctrl-C stops the server)"
+    ));
+    let report = report_route::ReportRoute {
+        data: context.data.clone(),
+        out: out.to_path_buf(),
+    };
+    let labels = labels_page::DiskLabels {
+        store: crate::data::labels::LabelStore::new(context.data.join("labels")),
+    };
+    let root = |request: &Request| {
+        (request.path == "/").then(|| {
+            report
+                .answer(&Request {
+                    method: request.method.clone(),
+                    path: "/report".into(),
+                    body: Vec::new(),
+                })
+                .unwrap_or_else(|| Reply::not_found("/report"))
+        })
+    };
+    let report = |request: &Request| report.answer(request);
+    let labels = |request: &Request| labels_page::answer(&labels, request);
+    server.serve(&[&root, &report, &labels], &|| {
+        crate::commands::interrupt::requested().is_some()
+    });
+    context.say("server stopped");
+    Ok(())
+}
 
 /// The largest request body accepted; the API's bodies are a few dozen bytes.
 pub(crate) const MAX_BODY_BYTES: usize = 16 * 1024;
