@@ -1,11 +1,12 @@
 #!/usr/bin/env bash
 # Runs the whole test suite (unit, integration, physics, CLI) in release mode: the physics
 # tests simulate full pick attempts, which a debug build runs far slower. libtorch (for tch) is
-# installed into .venv/ first, and the system packages the tests call (ffmpeg for ffprobe, which
-# checks the MP4 videos) with apt-get when they are missing and we are root; both are no-ops once
-# they are there.
+# installed into .venv/ first, and the system packages the tests call with apt-get when they are
+# missing and we are root: ffmpeg (ffprobe checks the MP4 videos), chromium and chromium-driver
+# (the browser test drives the labelling page through WebDriver). Both are no-ops once they are
+# there; without root the tests that need a package fail with the command that installs it.
 set -euo pipefail
 cd "$(dirname "$0")"
 scripts/setup-libtorch.sh
-scripts/setup-system.sh ffmpeg
+scripts/setup-system.sh ffmpeg chromium chromium-driver
 cargo test --release --locked "$@"

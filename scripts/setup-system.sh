@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the Debian packages the test suite runs, given as arguments (e.g. `ffmpeg`), when any
-# is missing: ffprobe (from ffmpeg) checks the episode videos. Idempotent: when every package is
+# is missing: ffprobe (from ffmpeg) checks the episode videos; chromium and chromium-driver run
+# the browser test. Idempotent: when every package is
 # installed it does nothing and prints nothing. Without root (or apt-get) it installs nothing and
 # says which command would, and the tests that need the tool then fail naming it.
 #
