@@ -628,3 +628,73 @@ fn delete_names_what_is_wrong_with_its_argument() {
         assert!(stderr.contains(needle), "{value}: {stderr}");
     }
 }
+
+#[test]
+fn report_serve_shows_the_report_and_the_labels_and_deletes_only_under_the_lock() {
+    let mut web = labelled("2");
+    let data = web.data();
+    web.stop();
+    let mut child = Command::new(BIN)
+        .arg("--data")
+        .arg(&data)
+        .args(["report", "--serve", "--port", "0"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let mut first = String::new();
+    let mut stdout = BufReader::new(child.stdout.take().unwrap());
+    while !first.contains("http://") {
+        first.clear();
+        assert!(
+            stdout.read_line(&mut first).unwrap() > 0,
+            "no address printed"
+        );
+    }
+    let address = first
+        .split("http://")
+        .nth(1)
+        .unwrap()
+        .split('/')
+        .next()
+        .unwrap()
+        .to_owned();
+    let get = |path: &str| raw(&address, "GET", path, &format!("Host: {address}\r\n"), None);
+    let (status, page) = get("/report");
+    assert_eq!(status, 200);
+    assert!(page.contains("graspmap run report"), "{page}");
+    let link = page
+        .split("src=\"")
+        .nth(1)
+        .and_then(|rest| rest.split('"').next())
+        .expect("the report shows an image");
+    assert_eq!(get(&format!("/{link}")).0, 200, "{link}");
+    assert_eq!(get("/report_files/../labels/labels.json").0, 404);
+    assert_eq!(get("/").0, 200);
+    assert_eq!(get("/labels").0, 200);
+    let listed: serde_json::Value = serde_json::from_str(&get("/api/labels").1).unwrap();
+    assert_eq!(listed["total"], 2);
+    // A labeller holding the store: the delete is refused, naming the lock.
+    let lock = graspmap::data::lock::StoreLock::acquire(&data.join("labels"), "label").unwrap();
+    let delete = |path: &str| {
+        raw(
+            &address,
+            "DELETE",
+            path,
+            &format!("Host: {address}\r\n"),
+            None,
+        )
+    };
+    let (status, body) = delete("/api/labels/YcbTennisBall/1");
+    assert_eq!(status, 409, "{body}");
+    assert!(body.contains(".lock"), "{body}");
+    drop(lock);
+    let (status, body) = delete("/api/labels/YcbTennisBall/1");
+    assert_eq!(status, 200, "{body}");
+    assert_eq!(
+        LabelStore::new(data.join("labels")).load().unwrap().len(),
+        1
+    );
+    send_signal(&child, libc::SIGINT);
+    assert!(child.wait().unwrap().success());
+}
