@@ -105,6 +105,7 @@ impl PredictArgs {
         PredictConfig {
             checkpoint: checkpoint_path(data, self.checkpoint),
             image: self.image,
+            depth: self.depth,
             out,
             precision: self.precision.resolve(),
         }
@@ -159,6 +160,8 @@ impl LabelArgs {
             },
             force: self.force,
             check: self.check,
+            clutter: self.clutter,
+            backfill_depth: self.backfill_depth,
         }
     }
 }
@@ -172,6 +175,7 @@ impl TrainArgs {
                 lr: self.lr,
                 seed: self.seed,
                 precision: self.precision.resolve(),
+                input: self.input,
                 ..TrainConfig::default()
             },
             resume: self.resume,

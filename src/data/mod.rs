@@ -7,6 +7,9 @@
 
 pub(crate) mod atomic;
 pub mod augment;
+pub mod clutter;
 pub mod dataset;
+pub mod depth;
+pub mod input;
 pub mod labels;
 pub mod lock;

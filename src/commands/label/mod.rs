@@ -1,6 +1,8 @@
 //! `graspmap label`: collect grasp labels round by round, each verified by a simulated pick, resumable after any interruption.
 
+mod backfill;
 mod clicks;
+mod rounds;
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
@@ -13,12 +15,12 @@ use super::interrupt;
 use super::report::write_report;
 use super::Context;
 use crate::assets::objects::ObjectModel;
+use crate::data::depth::check_depth_files;
 use crate::data::labels::{Label, LabelStore, Labels, Progress};
 use crate::data::lock::StoreLock;
 use crate::grasp::world_grasp;
 use crate::metrics::FailureTally;
 use crate::sim::pick::PickReason;
-use crate::sim::{Workcell, WorkcellConfig};
 #[cfg(test)]
 pub(crate) use clicks::parse_clicks;
 use clicks::{check_enough_clicks, read_clicks, Clicker};
@@ -40,6 +42,10 @@ pub(crate) struct LabelConfig {
     pub(crate) force: bool,
     /// Only validate the existing dataset.
     pub(crate) check: bool,
+    /// Objects dropped per round: the round's object and `clutter` − 1 others. Default 1.
+    pub(crate) clutter: u32,
+    /// Only write the depth files that an older dataset lacks.
+    pub(crate) backfill_depth: bool,
 }
 
 /// Where a round's click comes from.
@@ -77,6 +83,9 @@ struct ObjectSummary {
     new_labels: usize,
     /// Failed rounds of this run by reason.
     failures: FailureTally,
+    /// Labels of this run whose pick carried another object than the round's (clutter only):
+    /// stored under the round's object all the same (docs/data.md, "Clutter rounds").
+    lifted_other: usize,
 }
 
 #[derive(Debug, serde::Serialize)]
@@ -95,8 +104,19 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     if args.check {
         return check(context, &store, &context.objects.names());
     }
+    if args.backfill_depth {
+        return backfill::backfill_depth(context, &store).map(|_| ());
+    }
     let _writer = StoreLock::acquire(store.dir(), "label")?;
     let split = context.split()?;
+    if args.clutter as usize > split.train.len() {
+        bail!(
+            "--clutter {}: the split has only {} training objects to drop (use 1 to {})",
+            args.clutter,
+            split.train.len(),
+            split.train.len()
+        );
+    }
     let models = context.objects.load_all(&split.train)?;
     let clicker = clicker(&args, &split.train)?;
 
@@ -140,6 +160,7 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
         context,
         args: &args,
         store: &store,
+        write_depth: writes_depth(&store, &labels),
         clicker: &clicker,
         bar: &bar,
         verbose_rounds: !matches!(clicker, Clicker::Scripted { .. }),
@@ -184,6 +205,7 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
             },
             "click_noise_px": args.noise.px,
             "angle_noise_deg": args.noise.deg,
+            "clutter": args.clutter,
             "train": split.train,
         });
         write_report(json, "label", args.seed, &resolved, &results)?;
@@ -226,6 +248,8 @@ struct ObjectJob<'a> {
     context: &'a Context,
     args: &'a LabelConfig,
     store: &'a LabelStore,
+    /// Store each label's depth image beside it (every dataset but an older one without them).
+    write_depth: bool,
     clicker: &'a Clicker,
     bar: &'a indicatif::ProgressBar,
     verbose_rounds: bool,
@@ -253,7 +277,7 @@ impl ObjectJob<'_> {
                     if j >= objects.len() || self.stop.load(Ordering::SeqCst) {
                         break;
                     }
-                    let outcome = self.label_object(j, &objects[j], &models[j], shared);
+                    let outcome = self.label_object(j, &objects[j], models, shared);
                     if outcome.is_err() {
                         self.stop.store(true, Ordering::SeqCst);
                     }
@@ -273,11 +297,10 @@ impl ObjectJob<'_> {
         &self,
         j: usize,
         object: &str,
-        model: &ObjectModel,
+        models: &[ObjectModel],
         shared: &Mutex<Shared>,
     ) -> anyhow::Result<ObjectSummary> {
         let args = self.args;
-        let config = WorkcellConfig::default();
         let mut summary = ObjectSummary {
             object: object.to_owned(),
             ..Default::default()
@@ -302,22 +325,21 @@ impl ObjectJob<'_> {
                     args.max_rounds
                 );
             }
-            let round_seed = args.seed + 100 * j as u64 + round as u64;
+            let round_seed = rounds::round_seed(args.seed, j, round);
             self.bar
                 .set_message(format!("{object} {have}/{} round {round}", args.per_object));
-            let mut cell = Workcell::new(&config)?;
-            cell.drop_objects(std::slice::from_ref(model), round_seed)?;
+            let (mut cell, id) = rounds::round_scene(models, j, args.clutter, round_seed)?;
             let frame = cell.capture();
             let camera = *cell.camera();
             let click = self
                 .clicker
-                .click(object, round, round_seed, &camera, &frame)?;
-            let (reason, detail) = match &click {
+                .click(object, id, round, round_seed, &camera, &frame)?;
+            let (reason, detail, lifted) = match &click {
                 Ok(grasp) => {
                     let outcome = cell.pick(&world_grasp(&camera, &frame, *grasp));
-                    (outcome.reason, outcome.detail)
+                    (outcome.reason, outcome.detail, outcome.object)
                 }
-                Err(why) => (PickReason::Ungraspable, why.clone()),
+                Err(why) => (PickReason::Ungraspable, why.clone(), None),
             };
             let line = match &click {
                 Ok(g) => format!(
@@ -334,13 +356,18 @@ impl ObjectJob<'_> {
                 let mut state = lock(shared);
                 let Shared { labels, progress } = &mut *state;
                 if let (PickReason::Success, Ok(grasp)) = (reason, &click) {
+                    // The round's object, whichever object the pick carried: the label is a
+                    // grasp that worked in this round's image (docs/data.md, "Clutter rounds").
+                    let depth = self.write_depth.then(|| frame.to_depth_image_mm());
                     self.store.append(
                         labels,
                         object,
                         Label::from(*grasp),
                         &frame.to_rgb_image(),
+                        depth.as_ref(),
                     )?;
                     summary.new_labels += 1;
+                    summary.lifted_other += usize::from(lifted.as_deref() != Some(object));
                     self.bar.inc(1);
                 } else {
                     summary.failures.add(reason.as_str());
@@ -387,6 +414,21 @@ fn print_summary(context: &Context, results: &LabelResults) {
     ));
 }
 
+/// Whether new labels get depth files: yes unless the dataset already holds labels without
+/// them (made before depth files existed), which would leave it half with, half without.
+fn writes_depth(store: &LabelStore, labels: &Labels) -> bool {
+    let all = labels
+        .iter()
+        .all(|(object, list)| (1..=list.len()).all(|k| store.depth_path(object, k).exists()));
+    if !all {
+        tracing::warn!(
+            "{} has labels without depth images; new labels get none either (run `graspmap label --backfill-depth` first to add them)",
+            store.dir().display()
+        );
+    }
+    all
+}
+
 /// Where to continue: the rounds already run per object, from progress.json.
 fn resume_point(
     store: &LabelStore,
@@ -399,6 +441,7 @@ fn resume_point(
         schema: Progress::SCHEMA.to_owned(),
         seed: args.seed,
         source: source.to_owned(),
+        clutter: args.clutter,
         rounds: Vec::new(),
     };
     let Some(mut progress) = store.load_progress()? else {
@@ -429,11 +472,12 @@ fn resume_point(
             Progress::SCHEMA
         );
     }
-    if progress.seed != args.seed || progress.source != source {
+    if progress.seed != args.seed || progress.source != source || progress.clutter != args.clutter {
         bail!(
-            "the labels in {} were made with --seed {} ({} clicks); rerun with those settings to resume, or with --force to start over",
+            "the labels in {} were made with --seed {} --clutter {} ({} clicks); rerun with those settings to resume, or with --force to start over",
             store.dir().display(),
             progress.seed,
+            progress.clutter,
             progress.source
         );
     }
@@ -456,7 +500,8 @@ fn resume_point(
 
 /// `label --check`: every problem on stdout, then exit 2 if there was any.
 fn check(context: &Context, store: &LabelStore, known: &[String]) -> anyhow::Result<()> {
-    let problems = store.check(known);
+    let mut problems = store.check(known);
+    problems.extend(check_depth_files(store));
     for problem in &problems {
         context.say(problem);
     }
