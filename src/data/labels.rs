@@ -273,7 +273,13 @@ impl LabelStore {
         if let Some(depth) = depth {
             save_image_atomic(depth, &self.depth_path(object, k))?;
         }
-        save_image_atomic(image, &image_path)?;
+        if let Err(e) = save_image_atomic(image, &image_path) {
+            // No image, no label: take the depth away again (`--check` would call it extra).
+            if depth.is_some() {
+                let _ = std::fs::remove_file(self.depth_path(object, k));
+            }
+            return Err(e);
+        }
         labels.push(object, label);
         if let Err(e) = write_atomic(&self.labels_path(), labels.to_json().as_bytes()) {
             // labels.json still lists k - 1 images: take the k-th away again, so that the

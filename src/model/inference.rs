@@ -95,3 +95,76 @@ impl AffordanceModel {
         Ok(AffordanceMaps::new(w, values))
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::train::{save_checkpoint, CheckpointMeta, Plateau, TrainConfig};
+
+    /// A freshly initialised checkpoint of `input` saved as `dir/best.safetensors`.
+    fn saved(dir: &Path, input: InputKind) -> std::path::PathBuf {
+        let vs = nn::VarStore::new(Device::Cpu);
+        let _net = MiniUNet::with_input(&vs.root(), input);
+        let meta = CheckpointMeta {
+            schema: CheckpointMeta::SCHEMA.to_owned(),
+            config: TrainConfig {
+                input,
+                ..TrainConfig::default()
+            },
+            epoch: 1,
+            history: Vec::new(),
+            best_val_loss: 1.0,
+            best_epoch: 1,
+            lr: 1e-3,
+            plateau: Plateau::default(),
+            adam_steps: 1,
+            train_indices: vec![0],
+            val_indices: vec![1],
+        };
+        save_checkpoint(&vs, &[], &meta, dir, "best").unwrap();
+        dir.join("best.safetensors")
+    }
+
+    fn inputs(kind: InputKind) -> Vec<NetInput> {
+        let rgb = image::RgbImage::from_pixel(32, 32, image::Rgb([90, 120, 30]));
+        let depth = crate::data::input::DepthMm::from_pixel(32, 32, image::Luma([650]));
+        let input = NetInput::new(kind, rgb, Some(&depth));
+        vec![input; BINS]
+    }
+
+    #[test]
+    fn a_checkpoint_keeps_its_input_and_refuses_another() {
+        let dir = tempfile::tempdir().unwrap();
+        for kind in [InputKind::Rgb, InputKind::Rgbd] {
+            let sub = dir.path().join(kind.to_string());
+            std::fs::create_dir_all(&sub).unwrap();
+            let path = saved(&sub, kind);
+            let model = AffordanceModel::load(&path, Precision::Fp32).unwrap();
+            assert_eq!(model.input(), kind, "round trip");
+            let maps = model.predict(&inputs(kind)).unwrap();
+            assert!(maps.choose().score.is_finite());
+        }
+        let rgbd = AffordanceModel::load(
+            &dir.path().join("rgbd").join("best.safetensors"),
+            Precision::Fp32,
+        )
+        .unwrap();
+        let error = rgbd
+            .predict(&inputs(InputKind::Rgb))
+            .err()
+            .expect("an rgbd model refuses 3 planes")
+            .to_string();
+        for needle in [
+            "rgbd/best.safetensors",
+            "an rgbd model (4 input planes)",
+            "3 planes",
+        ] {
+            assert!(error.contains(needle), "{needle:?} missing from {error}");
+        }
+        // And an rgb checkpoint's JSON leaves the field out, as before it existed.
+        let text = std::fs::read_to_string(dir.path().join("rgb").join("best.json")).unwrap();
+        assert!(!text.contains("\"input\""), "{text}");
+        let text = std::fs::read_to_string(dir.path().join("rgbd").join("best.json")).unwrap();
+        assert!(text.contains("\"input\": \"rgbd\""), "{text}");
+    }
+}
