@@ -12,7 +12,7 @@ use super::input::read_depth_png;
 use super::labels::{LabelStore, LABELS_FILE};
 
 /// File-name ending of a label's depth image, after `<Object>_<k>`.
-pub const DEPTH_SUFFIX: &str = "_depth.png";
+pub(crate) const DEPTH_SUFFIX: &str = "_depth.png";
 
 /// Every problem with the dataset's depth files, one line each: none when it has no depth file
 /// at all (the reference layout); otherwise a listed label without its depth file, a depth file

@@ -21,7 +21,7 @@ pub type DepthMm = ImageBuffer<Luma<u16>, Vec<u16>>;
 /// Heights from 0 (the tote floor) to this many millimetres map to the input range [0, 1];
 /// anything higher reads 1. One grey level is one millimetre, and the tote's walls (190 mm above
 /// its floor) and the tallest stacks still fit below it.
-pub const HEIGHT_FULL_SCALE_MM: f32 = 255.0;
+pub(crate) const HEIGHT_FULL_SCALE_MM: f32 = 255.0;
 
 /// Which planes the network takes.
 #[derive(
@@ -89,7 +89,7 @@ pub fn height_from_depth_mm(depth: &DepthMm) -> GrayImage {
 
 /// One network input before its conversion to CHW: the RGB image and, for rgbd, its height plane.
 #[derive(Debug, Clone, PartialEq)]
-pub struct NetInput {
+pub(crate) struct NetInput {
     /// The camera's colour image.
     pub(crate) rgb: RgbImage,
     /// Height above the tote floor, 1 mm per level ([`height_from_depth_mm`]); `None` for rgb.

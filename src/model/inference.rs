@@ -149,11 +149,10 @@ mod tests {
             Precision::Fp32,
         )
         .unwrap();
-        let error = rgbd
-            .predict(&inputs(InputKind::Rgb))
-            .err()
-            .expect("an rgbd model refuses 3 planes")
-            .to_string();
+        let Err(error) = rgbd.predict(&inputs(InputKind::Rgb)) else {
+            panic!("an rgbd model took 3 planes");
+        };
+        let error = error.to_string();
         for needle in [
             "rgbd/best.safetensors",
             "an rgbd model (4 input planes)",

@@ -109,14 +109,7 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     }
     let _writer = StoreLock::acquire(store.dir(), "label")?;
     let split = context.split()?;
-    if args.clutter as usize > split.train.len() {
-        bail!(
-            "--clutter {}: the split has only {} training objects to drop (use 1 to {})",
-            args.clutter,
-            split.train.len(),
-            split.train.len()
-        );
-    }
+    check_clutter(args.clutter, &split.train)?;
     let models = context.objects.load_all(&split.train)?;
     let clicker = clicker(&args, &split.train)?;
 
@@ -194,21 +187,43 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     };
     print_summary(context, &results);
     if let Some(json) = &context.json {
-        let resolved = serde_json::json!({
-            "global": context,
-            "per_object": args.per_object,
-            "max_rounds": args.max_rounds,
-            "source": clicker.name(),
-            "clicks": match &args.source {
-                ClickSource::File(path) => Some(path),
-                _ => None,
-            },
-            "click_noise_px": args.noise.px,
-            "angle_noise_deg": args.noise.deg,
-            "clutter": args.clutter,
-            "train": split.train,
-        });
+        let resolved = resolved_config(context, &args, clicker.name(), &split.train);
         write_report(json, "label", args.seed, &resolved, &results)?;
+    }
+    Ok(())
+}
+
+/// The run's settings as the JSON report lists them.
+fn resolved_config(
+    context: &Context,
+    args: &LabelConfig,
+    source: &str,
+    train: &[String],
+) -> serde_json::Value {
+    serde_json::json!({
+        "global": context,
+        "per_object": args.per_object,
+        "max_rounds": args.max_rounds,
+        "source": source,
+        "clicks": match &args.source {
+            ClickSource::File(path) => Some(path),
+            _ => None,
+        },
+        "click_noise_px": args.noise.px,
+        "angle_noise_deg": args.noise.deg,
+        "clutter": args.clutter,
+        "train": train,
+    })
+}
+
+/// A round drops at most every training object once.
+fn check_clutter(clutter: u32, train: &[String]) -> anyhow::Result<()> {
+    if clutter as usize > train.len() {
+        bail!(
+            "--clutter {clutter}: the split has only {} training objects to drop (use 1 to {})",
+            train.len(),
+            train.len()
+        );
     }
     Ok(())
 }
