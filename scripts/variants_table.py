@@ -17,7 +17,11 @@ def name(v):
 
 
 def load(path):
-    return json.load(open(path))["results"] if os.path.exists(path) else None
+    """A report's results; None when it is missing or a signal stopped it half-way."""
+    if not os.path.exists(path):
+        return None
+    results = json.load(open(path))["results"]
+    return None if results.get("interrupted") else results
 
 
 def per_seed(report, task):
@@ -45,6 +49,8 @@ def paired(a, b):
 
 def main():
     out, variants = sys.argv[1], sys.argv[2:]
+    # A variant that has not been trained yet (a run stopped early) is left out.
+    variants = [v for v in variants if os.path.exists(f"{out}/{name(v)}/train.json")]
     names = [name(v) for v in variants]
     rows = {}
     for v, n in zip(variants, names):
@@ -69,8 +75,12 @@ def main():
         rows[n] = row
 
     base = rows[names[0]]
+    core = ("train_vt200", "test_vt200", "empty_np8_vt200")
     for n in names[1:]:
         r = rows[n]
+        if any(r[k] is None or base[k] is None for k in core):
+            r["rule"] = None
+            continue
         test = paired(r["test_vt200"], base["test_vt200"])
         empty = paired(r["empty_np8_vt200"], base["empty_np8_vt200"])
         r["rule"] = {
@@ -115,6 +125,9 @@ def main():
     print("|---|---|---|---|---|---|")
     for n in names[1:]:
         u = rows[n]["rule"]
+        if u is None:
+            print(f"| {n} | – | – | – | – | not measured |")
+            continue
         print(f"| {n} | {u['test_diff_mean']:+.2f} ± {u['test_diff_se']:.2f} "
               f"{'(beats)' if u['test_beats'] else ''} | {u['empty_diff_mean']:+.2f} ± "
               f"{u['empty_diff_se']:.2f} {'(beats)' if u['empty_beats'] else ''} "
