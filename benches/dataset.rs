@@ -6,13 +6,14 @@ use std::time::Instant;
 
 use graspmap::data::augment::AugmentConfig;
 use graspmap::data::dataset::{load_dataset, training_sample};
+use graspmap::data::input::InputKind;
 use graspmap::data::labels::LabelStore;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 fn main() {
     let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/reference-labels");
-    let items = load_dataset(&LabelStore::new(fixture)).expect("the fixture loads");
+    let items = load_dataset(&LabelStore::new(fixture), InputKind::Rgb).expect("the fixture loads");
     let item = &items[0];
     let config = AugmentConfig {
         probability: 1.0,

@@ -12,6 +12,7 @@ use crate::commands;
 use crate::commands::bench::{BenchConfig, PeerPython};
 use crate::commands::eval::{PolicyKind, Task};
 use crate::commands::scene::SceneConfig;
+use crate::data::input::InputKind;
 use crate::grasp::PixelGrasp;
 use crate::model::unet::Precision;
 use crate::named::Named;
@@ -121,6 +122,9 @@ pub(crate) struct TrainArgs {
     /// Arithmetic of training.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
     pub(crate) precision: PrecisionChoice,
+    /// What the network sees; rgbd needs DATA/labels/<Object>_<k>_depth.png beside every label.
+    #[arg(long, value_parser = named::<InputKind>(), default_value = "rgb")]
+    pub(crate) input: InputKind,
 }
 
 /// `--precision` values.
@@ -244,6 +248,9 @@ pub(crate) struct PredictArgs {
     /// Where to write the 512 × 512 visualisation [default: DATA/affordance/predict_vis/<image stem>.png].
     #[arg(long, value_name = "PNG")]
     pub(crate) out: Option<PathBuf>,
+    /// The image's depth, 16-bit millimetres as `scene --depth` writes it (rgbd models need it).
+    #[arg(long, value_name = "PNG")]
+    pub(crate) depth: Option<PathBuf>,
     /// Arithmetic of the network.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
     pub(crate) precision: PrecisionChoice,
@@ -362,6 +369,13 @@ pub(crate) struct LabelArgs {
     /// Only validate the existing dataset; exit 2 if anything is wrong.
     #[arg(long, conflicts_with_all = ["clicks", "interactive", "web"])]
     pub(crate) check: bool,
+    /// Objects dropped per round: the round's object and K − 1 other training objects.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) clutter: u32,
+    /// Write the missing <Object>_<k>_depth.png of a dataset graspmap labelled before depth
+    /// files existed, by replaying its rounds' drops.
+    #[arg(long, conflicts_with_all = ["check", "force", "clicks", "interactive"])]
+    pub(crate) backfill_depth: bool,
 }
 
 /// `YcbHammer:3`: an object and a label number from 1.

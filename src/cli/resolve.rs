@@ -117,6 +117,7 @@ impl PredictArgs {
         PredictConfig {
             checkpoint: checkpoint_path(data, self.checkpoint),
             image: self.image,
+            depth: self.depth,
             out,
             precision: self.precision.resolve(),
         }
@@ -179,6 +180,8 @@ impl LabelArgs {
             force: self.force,
             check: self.check,
             delete: self.delete,
+            clutter: self.clutter,
+            backfill_depth: self.backfill_depth,
         }
     }
 }
@@ -192,6 +195,7 @@ impl TrainArgs {
                 lr: self.lr,
                 seed: self.seed,
                 precision: self.precision.resolve(),
+                input: self.input,
                 ..TrainConfig::default()
             },
             resume: self.resume,

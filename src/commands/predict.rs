@@ -8,7 +8,7 @@ use image::RgbImage;
 use super::report::write_report;
 use super::Context;
 use crate::data::atomic::save_image_atomic;
-use crate::grasp::rotate::rotated_observations;
+use crate::data::input::{read_depth_png, rotated_inputs, InputKind, NetInput};
 use crate::grasp::IMAGE_SIZE;
 use crate::model::inference::AffordanceModel;
 use crate::model::unet::Precision;
@@ -22,6 +22,8 @@ const MAX_DECODED_SIDE: u32 = 4096;
 pub(crate) struct PredictConfig {
     /// A 128 × 128 RGB image (PNG or JPEG).
     pub(crate) image: PathBuf,
+    /// Its depth image (16-bit millimetres), which an rgbd model needs.
+    pub(crate) depth: Option<PathBuf>,
     /// The model's weights.
     pub(crate) checkpoint: PathBuf,
     /// Where the 512 × 512 visualisation goes.
@@ -58,9 +60,11 @@ pub(crate) fn run(context: &Context, args: PredictConfig) -> anyhow::Result<()> 
     crate::model::use_threads(context.threads);
     let precision = args.precision;
     let model = AffordanceModel::load(checkpoint, precision)?;
+    let input = observation_input(&model, checkpoint, image, args.depth.as_deref())?;
     let start = std::time::Instant::now();
-    let rotated = rotated_observations(&image);
-    let maps = model.predict(&rotated);
+    let rotated_input = rotated_inputs(&input);
+    let maps = model.predict(&rotated_input)?;
+    let rotated: Vec<RgbImage> = rotated_input.into_iter().map(|r| r.rgb).collect();
     let choice = maps.choose();
     let network_seconds = start.elapsed().as_secs_f64();
     let out = args.out.clone();
@@ -90,11 +94,39 @@ pub(crate) fn run(context: &Context, args: PredictConfig) -> anyhow::Result<()> 
             "checkpoint": checkpoint,
             "precision": precision,
             "image": args.image,
+            "depth": args.depth,
             "out": out,
         });
         write_report(json, "predict", 0, &resolved, &results)?;
     }
     Ok(())
+}
+
+/// The model's input for the image: with an rgbd model, the height plane from `--depth`,
+/// which must then be given.
+fn observation_input(
+    model: &AffordanceModel,
+    checkpoint: &Path,
+    image: RgbImage,
+    depth: Option<&Path>,
+) -> anyhow::Result<NetInput> {
+    match (model.input(), depth) {
+        (InputKind::Rgb, None) => Ok(NetInput::rgb(image)),
+        (InputKind::Rgb, Some(path)) => bail!(
+            "--depth {}: {} is an rgb model, which reads no depth; leave --depth out",
+            path.display(),
+            checkpoint.display()
+        ),
+        (InputKind::Rgbd, None) => bail!(
+            "{} is an rgbd model: give the image's depth with --depth PNG (16-bit millimetres, \
+             as `graspmap scene --depth` writes it)",
+            checkpoint.display()
+        ),
+        (InputKind::Rgbd, Some(path)) => {
+            let depth = read_depth_png(path)?;
+            Ok(NetInput::new(InputKind::Rgbd, image, Some(&depth)))
+        }
+    }
 }
 
 /// Reads a 128 × 128 8-bit RGB image (an opaque RGBA one is accepted), or says what is wrong.

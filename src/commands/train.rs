@@ -60,7 +60,7 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
     crate::model::use_threads(context.threads);
     tch::manual_seed(config.seed as i64);
     let store = LabelStore::new(context.data.join("labels"));
-    let images = load_dataset(&store)?;
+    let images = load_dataset(&store, config.input)?;
     if images.len() < 2 {
         bail!(
             "{} has {} labels; training needs at least 2 (run graspmap label first)",
@@ -155,7 +155,7 @@ fn start(
     resume: bool,
 ) -> anyhow::Result<Run> {
     let mut vs = nn::VarStore::new(tch::Device::Cpu);
-    let net = MiniUNet::new(&vs.root());
+    let net = MiniUNet::with_input(&vs.root(), config.input);
     let mut adam = Adam::new(&vs, config.lr);
     if !resume {
         let (train_indices, val_indices) = split_train_validation(n_images, config.seed);
@@ -185,14 +185,16 @@ fn start(
         || saved.batch_size != config.batch_size
         || saved.lr != config.lr
         || saved.precision != config.precision
+        || saved.input != config.input
     {
         bail!(
-            "{} was trained with --seed {} --batch-size {} --lr {} --precision {}; resume with the same values",
+            "{} was trained with --seed {} --batch-size {} --lr {} --precision {} --input {}; resume with the same values",
             out_dir.join("last.json").display(),
             saved.seed,
             saved.batch_size,
             saved.lr,
-            saved.precision.name()
+            saved.precision.name(),
+            saved.input
         );
     }
     let known = meta.train_indices.len() + meta.val_indices.len();

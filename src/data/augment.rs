@@ -3,10 +3,12 @@
 //! The image and the points go through the same affine map as every rotation in the project
 //! ([`crate::grasp::rotate`]). Everything here is pure: randomness comes from the caller's `Rng`.
 
+#[cfg(test)]
 use image::RgbImage;
 use rand::Rng;
 
-use crate::grasp::rotate::{image_centre, map_point, warp_affine};
+use super::input::NetInput;
+use crate::grasp::rotate::{image_centre, map_point};
 
 /// Random affine augmentation of a training sample (the reference's imgaug settings).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -49,15 +51,29 @@ impl Default for AugmentConfig {
 ///
 /// Draws from `rng` in a fixed order (apply?, angle, dx, dy), and nothing more when the sample
 /// is not augmented, so a seeded generator reproduces the same augmentations.
+#[cfg(test)]
 pub(crate) fn augment(
     image: &RgbImage,
     fingers: [[f32; 2]; 2],
     config: &AugmentConfig,
     rng: &mut impl Rng,
 ) -> (RgbImage, [[f32; 2]; 2]) {
+    let (input, moved) = augment_input(&NetInput::rgb(image.clone()), fingers, config, rng);
+    (input.rgb, moved)
+}
+
+/// [`augment`] for a whole network input: the same draws, and one map for the RGB, the height
+/// plane (rgbd) and the finger points, so the planes stay aligned.
+pub(crate) fn augment_input(
+    input: &NetInput,
+    fingers: [[f32; 2]; 2],
+    config: &AugmentConfig,
+    rng: &mut impl Rng,
+) -> (NetInput, [[f32; 2]; 2]) {
     if !rng.random_bool(config.probability.clamp(0.0, 1.0)) {
-        return (image.clone(), fingers);
+        return (input.clone(), fingers);
     }
+    let image = &input.rgb;
     // Uniform in [−max, max); written out rather than with random_range so that a zero range
     // (augmentation switched off on one axis) is allowed.
     let mut symmetric = |max: f32| (rng.random::<f32>() * 2.0 - 1.0) * max;
@@ -68,7 +84,7 @@ pub(crate) fn augment(
     ];
     let centre = image_centre(image);
     let moved = fingers.map(|p| map_point(p, angle, translate, centre));
-    (warp_affine(image, angle, translate), moved)
+    (input.warped(angle, translate), moved)
 }
 
 #[cfg(test)]

@@ -5,14 +5,15 @@
 //! model layer turns into tensors.
 
 use anyhow::{bail, Context};
-use image::RgbImage;
+use image::{GrayImage, RgbImage};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 use super::augment::{self, AugmentConfig};
+use super::input::{height_from_depth_mm, read_depth_png, InputKind, NetInput};
 use super::labels::LabelStore;
-use crate::grasp::rotate::{rotate_image, rotate_point};
+use crate::grasp::rotate::rotate_point;
 use crate::grasp::{angle_bin, bin_angle, fingers, grasp_from_fingers, PixelGrasp, IMAGE_SIZE};
 
 /// Standard deviation of the target Gaussian, in pixels (ref).
@@ -24,7 +25,7 @@ pub(crate) const MAX_AUGMENT_TRIES: usize = 10;
 /// One network example, already rotated into its angle bin.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sample {
-    /// Rotated image, 3 × H × W (CHW), RGB in [0, 1].
+    /// Rotated input, C × H × W (CHW): RGB in [0, 1], then for rgbd the height plane in [0, 1].
     pub(crate) input: Vec<f32>,
     /// H × W Gaussian (σ = 1 px, peak 1) at the pixel holding the rotated grasp centre.
     pub target: Vec<f32>,
@@ -53,17 +54,17 @@ impl Sample {
 /// and a Gaussian there would peak anywhere between e^(−1/4) ≈ 0.78 and 1, split over up to four
 /// pixels. Snapping keeps the peak at exactly 1 on one pixel, the pixel that prediction's argmax
 /// reads back.
-pub(crate) fn make_sample(image: &RgbImage, grasp_fingers: [[f32; 2]; 2]) -> Sample {
-    let (w, h) = image.dimensions();
+pub(crate) fn make_sample(image: &NetInput, grasp_fingers: [[f32; 2]; 2]) -> Sample {
+    let (w, h) = image.rgb.dimensions();
     assert_eq!(w, h, "square images only (got {w}×{h})");
     let (centre, angle) = grasp_from_fingers(grasp_fingers);
     let bin = angle_bin(angle);
     let turn = -bin_angle(bin);
-    let rotated = rotate_image(image, turn);
+    let rotated = image.warped(turn, [0.0, 0.0]);
     let center = rotate_point(centre, turn, w);
 
     let plane = (w * h) as usize;
-    let mut input = vec![0.0; 3 * plane];
+    let mut input = vec![0.0; rotated.channels() * plane];
     write_chw(&rotated, &mut input);
 
     let mut sample = Sample {
@@ -85,14 +86,21 @@ pub(crate) fn make_sample(image: &RgbImage, grasp_fingers: [[f32; 2]; 2]) -> Sam
     sample
 }
 
-/// Writes an RGB image into `out` as the network's input: 3 × H × W (CHW), each value in
-/// [0, 1]. The one conversion that training and prediction share, so both see the same numbers.
-pub(crate) fn write_chw(image: &RgbImage, out: &mut [f32]) {
-    let plane = (image.width() * image.height()) as usize;
-    assert_eq!(out.len(), 3 * plane, "one CHW image");
-    for (i, pixel) in image.pixels().enumerate() {
+/// Writes an input into `out` as the network sees it: C × H × W (CHW), each value in [0, 1]:
+/// RGB / 255, then for rgbd the height plane / 255 (1 mm per level, so 0 is the tote floor and
+/// 1 is 255 mm above it). The one conversion that training and prediction share, so both see
+/// the same numbers.
+pub(crate) fn write_chw(image: &NetInput, out: &mut [f32]) {
+    let plane = (image.rgb.width() * image.rgb.height()) as usize;
+    assert_eq!(out.len(), image.channels() * plane, "one CHW image");
+    for (i, pixel) in image.rgb.pixels().enumerate() {
         for (c, &value) in pixel.0.iter().enumerate() {
             out[c * plane + i] = f32::from(value) / 255.0;
+        }
+    }
+    if let Some(height) = &image.height {
+        for (i, pixel) in height.pixels().enumerate() {
+            out[3 * plane + i] = f32::from(pixel.0[0]) / 255.0;
         }
     }
 }
@@ -106,6 +114,8 @@ pub struct LabelledImage {
     pub(crate) k: usize,
     /// The 128 × 128 RGB observation.
     pub(crate) image: RgbImage,
+    /// Its height plane ([`height_from_depth_mm`] of `<Object>_<k>_depth.png`), loaded for rgbd.
+    pub(crate) height: Option<GrayImage>,
     /// The labelled grasp.
     pub(crate) grasp: PixelGrasp,
 }
@@ -113,8 +123,9 @@ pub struct LabelledImage {
 /// Reads labels.json and every image it lists, in file order. Fails, naming the file, when
 /// labels.json is missing or malformed, or an image is missing, unreadable, or not 128 × 128
 /// 8-bit RGB (images are never converted: a wrong image means the labels are not what the
-/// labelling tool wrote).
-pub fn load_dataset(store: &LabelStore) -> anyhow::Result<Vec<LabelledImage>> {
+/// labelling tool wrote). With `input` rgbd it also reads each label's depth image, and fails
+/// naming the first one that is missing.
+pub fn load_dataset(store: &LabelStore, input: InputKind) -> anyhow::Result<Vec<LabelledImage>> {
     let labels_path = store.labels_path();
     if !labels_path.exists() {
         bail!(
@@ -148,10 +159,15 @@ pub fn load_dataset(store: &LabelStore) -> anyhow::Result<Vec<LabelledImage>> {
             }
             // Already 8-bit RGB, so this only unwraps the buffer.
             let image = decoded.into_rgb8();
+            let height = match input {
+                InputKind::Rgb => None,
+                InputKind::Rgbd => Some(height_from_depth_mm(&load_depth(store, object, k)?)),
+            };
             items.push(LabelledImage {
                 object: object.to_owned(),
                 k,
                 image,
+                height,
                 grasp: label.into(),
             });
         }
@@ -180,16 +196,33 @@ pub fn training_sample(
     augmentation: Option<(&AugmentConfig, &mut ChaCha8Rng)>,
 ) -> Sample {
     let fingers = fingers(item.grasp);
+    let input = NetInput {
+        rgb: item.image.clone(),
+        height: item.height.clone(),
+    };
     if let Some((config, rng)) = augmentation {
         for _ in 0..MAX_AUGMENT_TRIES {
-            let (image, moved) = augment::augment(&item.image, fingers, config, rng);
+            let (image, moved) = augment::augment_input(&input, fingers, config, rng);
             let sample = make_sample(&image, moved);
-            if sample.center_pixel(image.width()).is_some() {
+            if sample.center_pixel(image.rgb.width()).is_some() {
                 return sample;
             }
         }
     }
-    make_sample(&item.image, fingers)
+    make_sample(&input, fingers)
+}
+
+/// The depth image of one label, or an error naming the first missing file and the fix.
+fn load_depth(store: &LabelStore, object: &str, k: usize) -> anyhow::Result<super::input::DepthMm> {
+    let path = store.depth_path(object, k);
+    if !path.exists() {
+        bail!(
+            "{}: missing, and --input rgbd needs a depth image beside every label (write them \
+             with `graspmap label --backfill-depth`, or train with --input rgb)",
+            path.display()
+        );
+    }
+    read_depth_png(&path)
 }
 
 #[cfg(test)]
@@ -243,6 +276,7 @@ mod tests {
             object: "Blob".into(),
             k: 1,
             image: blobs(&[[grasp.u as f32 + 0.5, grasp.v as f32 + 0.5]]),
+            height: None,
             grasp,
         }
     }
@@ -298,7 +332,7 @@ mod tests {
                     angle_deg: bin_angle(bin),
                 };
                 let f = fingers(grasp);
-                let sample = make_sample(&blobs(&f), f);
+                let sample = make_sample(&NetInput::rgb(blobs(&f)), f);
                 assert_eq!(sample.bin, bin);
                 let turned = f.map(|p| rotate_point(p, -bin_angle(bin), 128));
                 assert!((turned[0][1] - turned[1][1]).abs() < 1e-3, "{turned:?}");
@@ -340,7 +374,7 @@ mod tests {
                 angle_deg: bin_angle(bin),
             };
             let f = fingers(grasp);
-            let sample = make_sample(&RgbImage::new(128, 128), f);
+            let sample = make_sample(&NetInput::rgb(RgbImage::new(128, 128)), f);
             let expected = rotate_point([57.5, 70.5], -bin_angle(bin), 128);
             assert!(
                 (sample.center[0] - expected[0]).abs() < 1e-3
@@ -365,7 +399,7 @@ mod tests {
             v: 64,
             angle_deg: 0.0,
         });
-        let sample = make_sample(&image, f);
+        let sample = make_sample(&NetInput::rgb(image.clone()), f);
         let plane = 128 * 128;
         // Bin 0: no rotation, so channel c of pixel (u, v) sits at c·H·W + v·W + u.
         assert_eq!(sample.input[5 * 128 + 7], 7.0 / 255.0);
@@ -413,7 +447,10 @@ mod tests {
             angle_deg: 45.0,
         });
         let plain = training_sample(&item, None);
-        assert_eq!(plain, make_sample(&item.image, fingers(item.grasp)));
+        assert_eq!(
+            plain,
+            make_sample(&NetInput::rgb(item.image.clone()), fingers(item.grasp))
+        );
         let mut rng = ChaCha8Rng::seed_from_u64(0);
         let config = AugmentConfig::always();
         assert_ne!(training_sample(&item, Some((&config, &mut rng))), plain);
@@ -451,7 +488,7 @@ mod tests {
 
     #[test]
     fn fixture_loads_with_discs_at_the_labels() {
-        let items = load_dataset(&fixture()).unwrap();
+        let items = load_dataset(&fixture(), InputKind::Rgb).unwrap();
         let names: Vec<(String, usize)> = items.iter().map(|i| (i.object.clone(), i.k)).collect();
         assert_eq!(
             names,
@@ -512,29 +549,29 @@ mod tests {
         let store = LabelStore::new(dir.path());
         let hammer_2 = store.image_path("YcbHammer", 2);
         std::fs::remove_file(&hammer_2).unwrap();
-        let err = format!("{:#}", load_dataset(&store).unwrap_err());
+        let err = format!("{:#}", load_dataset(&store, InputKind::Rgb).unwrap_err());
         assert!(err.contains("YcbHammer_2_rgb.png"), "{err}");
         assert!(err.contains("graspmap label"), "{err}");
 
         RgbImage::new(64, 64).save(&hammer_2).unwrap();
-        let err = format!("{:#}", load_dataset(&store).unwrap_err());
+        let err = format!("{:#}", load_dataset(&store, InputKind::Rgb).unwrap_err());
         assert!(err.contains("YcbHammer_2_rgb.png"), "{err}");
         assert!(err.contains("64×64"), "{err}");
         assert!(err.contains("expected 128×128"), "{err}");
 
         image::RgbaImage::new(128, 128).save(&hammer_2).unwrap();
-        let err = format!("{:#}", load_dataset(&store).unwrap_err());
+        let err = format!("{:#}", load_dataset(&store, InputKind::Rgb).unwrap_err());
         assert!(
             err.contains("YcbHammer_2_rgb.png") && err.contains("Rgba8"),
             "{err}"
         );
 
         std::fs::write(&hammer_2, b"not a png").unwrap();
-        let err = format!("{:#}", load_dataset(&store).unwrap_err());
+        let err = format!("{:#}", load_dataset(&store, InputKind::Rgb).unwrap_err());
         assert!(err.contains("YcbHammer_2_rgb.png"), "{err}");
 
         std::fs::remove_file(store.labels_path()).unwrap();
-        let err = format!("{:#}", load_dataset(&store).unwrap_err());
+        let err = format!("{:#}", load_dataset(&store, InputKind::Rgb).unwrap_err());
         assert!(err.contains("labels.json"), "{err}");
     }
 

@@ -233,6 +233,13 @@ impl LabelStore {
         self.dir.join(format!("{object}_{k}_rgb.png"))
     }
 
+    /// Path of the depth image beside the k-th image of an object: a sidecar of
+    /// `<Object>_<k>_rgb.png` with the same `<Object>_<k>` stem (docs/data.md).
+    pub(crate) fn depth_path(&self, object: &str, k: usize) -> PathBuf {
+        self.dir
+            .join(format!("{object}_{k}{}", super::depth::DEPTH_SUFFIX))
+    }
+
     /// Deletes temporary files a killed run left behind (they are never read, but would
     /// otherwise pile up beside the dataset).
     pub(crate) fn remove_stale_temporaries(&self) -> anyhow::Result<()> {
@@ -260,22 +267,36 @@ impl LabelStore {
         }
     }
 
-    /// Appends one label: image first, then labels.json, each atomically.
+    /// Appends one label: its depth image (when given) first, then the image, then
+    /// labels.json, each atomically, so every listed image has its depth beside it.
     pub(crate) fn append(
         &self,
         labels: &mut Labels,
         object: &str,
         label: Label,
         image: &image::RgbImage,
+        depth: Option<&super::input::DepthMm>,
     ) -> anyhow::Result<usize> {
         let k = labels.of(object).len() + 1;
         let image_path = self.image_path(object, k);
-        save_image_atomic(image, &image_path)?;
+        if let Some(depth) = depth {
+            save_image_atomic(depth, &self.depth_path(object, k))?;
+        }
+        if let Err(e) = save_image_atomic(image, &image_path) {
+            // No image, no label: take the depth away again (`--check` would call it extra).
+            if depth.is_some() {
+                let _ = std::fs::remove_file(self.depth_path(object, k));
+            }
+            return Err(e);
+        }
         labels.push(object, label);
         if let Err(e) = write_atomic(&self.labels_path(), labels.to_json().as_bytes()) {
             // labels.json still lists k - 1 images: take the k-th away again, so that the
             // dataset on disk is exactly the one before this append (`--check` passes).
             let _ = std::fs::remove_file(&image_path);
+            if depth.is_some() {
+                let _ = std::fs::remove_file(self.depth_path(object, k));
+            }
             labels.pop(object);
             return Err(e);
         }
@@ -290,7 +311,11 @@ impl LabelStore {
         for entry in entries.flatten() {
             let name = entry.file_name();
             let name = name.to_string_lossy();
-            if name == LABELS_FILE || name.ends_with("_rgb.png") || name == PROGRESS_FILE {
+            if name == LABELS_FILE
+                || name.ends_with("_rgb.png")
+                || name.ends_with(super::depth::DEPTH_SUFFIX)
+                || name == PROGRESS_FILE
+            {
                 std::fs::remove_file(entry.path())
                     .with_context(|| format!("removing {}", entry.path().display()))?;
             }
@@ -392,8 +417,20 @@ pub(crate) struct Progress {
     /// Version 1's one click source; only read, moved into each object's `sources`.
     #[serde(default, skip_serializing)]
     pub(crate) source: Option<String>,
+    /// Objects dropped per round (`--clutter`). Left out when 1, the reference protocol, so
+    /// that files from before clutter rounds existed read, and are written, as they were.
+    #[serde(default = "one_object", skip_serializing_if = "is_one_object")]
+    pub(crate) clutter: u32,
     /// Per object: rounds run and labels stored after them.
     pub(crate) rounds: Vec<ObjectProgress>,
+}
+
+fn one_object() -> u32 {
+    1
+}
+
+fn is_one_object(clutter: &u32) -> bool {
+    *clutter == 1
 }
 
 /// One object's progress.
@@ -444,6 +481,7 @@ impl Progress {
             schema: Self::SCHEMA.to_owned(),
             seed,
             source: None,
+            clutter: 1,
             rounds: Vec::new(),
         }
     }

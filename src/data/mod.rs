@@ -7,7 +7,10 @@
 
 pub(crate) mod atomic;
 pub mod augment;
+pub mod clutter;
 pub mod dataset;
+pub mod depth;
+pub mod input;
 pub mod labels;
 pub mod lock;
 pub(crate) mod relabel;

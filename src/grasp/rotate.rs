@@ -13,13 +13,14 @@
 //! a textured image by about one grey level on average (a +22.5°/−22.5° round trip: −1.8); flat
 //! regions are unaffected. Small next to the augmentation itself, so accepted.
 
-use image::{Rgb, RgbImage};
+use image::{GrayImage, Luma, Rgb, RgbImage};
 use imageproc::geometric_transformations::{warp, Border, Interpolation, Projection};
 
-use super::{bin_angle, PixelGrasp, BINS};
+use super::{bin_angle, PixelGrasp};
 
 /// Rotates `image` about its centre by `angle_deg` (clockwise on screen for positive angles),
 /// bilinear, black where the source lies outside the image. Same size as the input.
+#[cfg(test)]
 pub(crate) fn rotate_image(image: &RgbImage, angle_deg: f32) -> RgbImage {
     warp_affine(image, angle_deg, [0.0, 0.0])
 }
@@ -42,8 +43,9 @@ pub(crate) fn unrotate(bin: usize, u: u32, v: u32, size: u32) -> PixelGrasp {
 }
 
 /// The rotated observations the maps belong to: image `b` is the original turned by −b · 22.5°.
+#[cfg(test)]
 pub(crate) fn rotated_observations(image: &RgbImage) -> Vec<RgbImage> {
-    (0..BINS)
+    (0..super::BINS)
         .map(|b| rotate_image(image, -bin_angle(b)))
         .collect()
 }
@@ -74,18 +76,44 @@ pub(crate) fn map_point(
 
 /// Resamples `image` under [`map_point`] with the image centre, bilinear with black fill.
 pub(crate) fn warp_affine(image: &RgbImage, angle_deg: f32, translate: [f32; 2]) -> RgbImage {
-    // imageproc samples pixel (u, v) at the point (u, v), ours at (u + 0.5, v + 0.5): in its frame
-    // the rotation centre is ours minus half a pixel, and translations are unchanged.
-    let [cx, cy] = image_centre(image).map(|c| c - 0.5);
-    let projection = Projection::translate(cx + translate[0], cy + translate[1])
-        * Projection::rotate(angle_deg.to_radians())
-        * Projection::translate(-cx, -cy);
     warp(
         image,
-        projection,
+        projection(image, angle_deg, translate),
         Interpolation::Bilinear,
         Border::Constant(Rgb([0, 0, 0])),
     )
+}
+
+/// [`warp_affine`] for a one-channel image (the rgbd input's height plane): the same map and
+/// the same bilinear resampling, so the plane stays aligned with the RGB; black (0) fill.
+pub(crate) fn warp_affine_gray(
+    image: &GrayImage,
+    angle_deg: f32,
+    translate: [f32; 2],
+) -> GrayImage {
+    warp(
+        image,
+        projection(image, angle_deg, translate),
+        Interpolation::Bilinear,
+        Border::Constant(Luma([0])),
+    )
+}
+
+/// imageproc's projection for [`map_point`] on an image of this size.
+fn projection<P: image::Pixel>(
+    image: &image::ImageBuffer<P, Vec<P::Subpixel>>,
+    angle_deg: f32,
+    translate: [f32; 2],
+) -> Projection {
+    // imageproc samples pixel (u, v) at the point (u, v), ours at (u + 0.5, v + 0.5): in its frame
+    // the rotation centre is ours minus half a pixel, and translations are unchanged.
+    let [cx, cy] = [
+        image.width() as f32 / 2.0 - 0.5,
+        image.height() as f32 / 2.0 - 0.5,
+    ];
+    Projection::translate(cx + translate[0], cy + translate[1])
+        * Projection::rotate(angle_deg.to_radians())
+        * Projection::translate(-cx, -cy)
 }
 
 #[cfg(test)]

@@ -19,6 +19,7 @@ use tch::{Device, Kind, Reduction, Tensor};
 use super::checkpoint;
 use crate::data::augment::AugmentConfig;
 use crate::data::dataset::{training_sample, LabelledImage, Sample};
+use crate::data::input::InputKind;
 use crate::model::unet::{MiniUNet, Precision};
 
 /// Training settings (the reference's defaults).
@@ -39,6 +40,10 @@ pub struct TrainConfig {
     pub(crate) patience: u32,
     /// Arithmetic of the forward and backward passes.
     pub precision: Precision,
+    /// What the network sees (`--input`). Left out of the JSON when rgb, so rgb checkpoints keep
+    /// the bytes they had before the option existed, and older checkpoints read as rgb.
+    #[serde(default, skip_serializing_if = "InputKind::is_rgb")]
+    pub input: InputKind,
 }
 
 impl Default for TrainConfig {
@@ -51,6 +56,7 @@ impl Default for TrainConfig {
             lr_factor: 0.1,
             patience: 3,
             precision: Precision::Fp32,
+            input: InputKind::Rgb,
         }
     }
 }
@@ -316,7 +322,8 @@ pub fn load_weights(
     Ok(())
 }
 
-/// Stacks samples into an input batch N×3×H×W and a target batch N×1×H×W.
+/// Stacks samples into an input batch N×C×H×W (C = 3, or 4 for rgbd) and a target batch
+/// N×1×H×W.
 pub(crate) fn batch(samples: &[Sample], size: i64) -> (Tensor, Tensor) {
     let n = samples.len() as i64;
     let inputs: Vec<f32> = samples
@@ -328,7 +335,7 @@ pub(crate) fn batch(samples: &[Sample], size: i64) -> (Tensor, Tensor) {
         .flat_map(|s| s.target.iter().copied())
         .collect();
     (
-        Tensor::from_slice(&inputs).view([n, 3, size, size]),
+        Tensor::from_slice(&inputs).view([n, -1, size, size]),
         Tensor::from_slice(&targets).view([n, 1, size, size]),
     )
 }

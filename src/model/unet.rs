@@ -7,6 +7,8 @@
 use tch::nn::{self, Module};
 use tch::{Kind, Tensor};
 
+use crate::data::input::InputKind;
+
 /// Arithmetic the forward pass runs in.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
@@ -95,10 +97,17 @@ fn up(path: nn::Path, input: i64, output: i64) -> nn::ConvTranspose2D {
 }
 
 impl MiniUNet {
-    /// Builds the layers under `root`, each on its own sub-path so names match the reference.
+    /// Builds the reference's network (RGB input) under `root`, each layer on its own sub-path
+    /// so names match the reference.
     pub fn new(root: &nn::Path) -> Self {
+        Self::with_input(root, InputKind::Rgb)
+    }
+
+    /// The network for `input`: only the first convolution's input planes differ (3 or 4), so
+    /// the parameter names stay the reference's and an rgb checkpoint is the reference's file.
+    pub fn with_input(root: &nn::Path, input: InputKind) -> Self {
         Self {
-            inc: conv(root / "inc" / "0", 3, 64, 3),
+            inc: conv(root / "inc" / "0", input.channels() as i64, 64, 3),
             down1: conv(root / "down1" / "1", 64, 128, 3),
             down2: conv(root / "down2" / "1", 128, 256, 3),
             upconv1: up(root / "upconv1", 256, 128),

@@ -339,7 +339,10 @@ mod tests {
                 v: 70,
                 angle_deg: bin_angle(bin),
             };
-            let sample = crate::data::dataset::make_sample(&image, crate::grasp::fingers(label));
+            let sample = crate::data::dataset::make_sample(
+                &crate::data::input::NetInput::rgb(image.clone()),
+                crate::grasp::fingers(label),
+            );
             let (pu, pv) = sample.center_pixel(SIZE).expect("inside");
             let back = unrotate(sample.bin, pu, pv, SIZE);
             assert!(

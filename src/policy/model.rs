@@ -7,8 +7,8 @@ use super::affordance::{visualisation, Suppression};
 use super::collision::{allowed_actions, CollisionCheck, GraspSite, GripperVolume, HeightMap};
 use super::oracle::{DepthCheck, OracleConfig};
 use super::{Decision, Observation, Policy};
+use crate::data::input::{rotated_inputs, InputKind, NetInput};
 use crate::grasp::gripper::GRIPPER;
-use crate::grasp::rotate::rotated_observations;
 use crate::grasp::tote::PICK_TOTE;
 use crate::model::inference::AffordanceModel;
 
@@ -81,8 +81,17 @@ impl Policy for ModelPolicy {
         } = self.config;
         let (camera, frame) = (view.camera, view.frame);
         let start = Instant::now();
-        let rotated = rotated_observations(view.rgb);
-        let mut maps = self.model.predict(&rotated);
+        // The same conversion as training: the frame's depth goes through the 16-bit millimetre
+        // image that `label` stores, so the height plane gets the same rounding.
+        let kind = self.model.input();
+        let depth = (kind == InputKind::Rgbd).then(|| frame.to_depth_image_mm());
+        let input = NetInput::new(kind, view.rgb.clone(), depth.as_ref());
+        let rotated_input = rotated_inputs(&input);
+        let mut maps = self
+            .model
+            .predict(&rotated_input)
+            .expect("the policy builds the input its model was trained on");
+        let rotated: Vec<_> = rotated_input.into_iter().map(|r| r.rgb).collect();
         let gripper = GripperVolume::from(&GRIPPER);
         if check != CollisionCheck::Off {
             maps.restrict(&allowed_actions(camera, frame, &PICK_TOTE, &gripper, check));

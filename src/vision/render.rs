@@ -174,14 +174,14 @@ impl Frame {
     }
 
     /// The colour image.
-    pub(crate) fn to_rgb_image(&self) -> image::RgbImage {
+    pub fn to_rgb_image(&self) -> image::RgbImage {
         image::RgbImage::from_raw(self.width, self.height, self.rgb.clone())
             .expect("rgb buffer length matches the frame size")
     }
 
     /// Depth as 16-bit millimetres: `round(depth · 1000)`, saturating to 0..=65535
     /// (NaN becomes 0).
-    pub(crate) fn to_depth_image_mm(&self) -> image::ImageBuffer<image::Luma<u16>, Vec<u16>> {
+    pub fn to_depth_image_mm(&self) -> image::ImageBuffer<image::Luma<u16>, Vec<u16>> {
         // `as` from float to integer saturates and maps NaN to 0, which is the contract.
         let mm = self
             .depth

@@ -411,9 +411,9 @@ fn a_full_disk_at_any_write_of_a_round_fails_clearly_and_the_rerun_resumes() {
     let reference = Workspace::new();
     assert_ok(&reference.run(&["--per-object", "1", "--threads", "1"]));
     let expected = reference.snapshot();
-    // One successful round writes the image, labels.json and progress.json; failed rounds write
-    // progress.json. Fail each of the first writes in turn.
-    for n in 1..=7 {
+    // One successful round writes the depth image, the image, labels.json and progress.json;
+    // failed rounds write progress.json. Fail each of the first writes in turn.
+    for n in 1..=9 {
         let ws = Workspace::new();
         let out = ws
             .command(&["--per-object", "1", "--threads", "1"])

@@ -1,11 +1,13 @@
 //! The integration tests, built into one binary so that libtorch and rapier are linked once.
 //!
-//! Each module covers one area end to end: the CLI's outputs and errors, evaluation, the mesh
-//! importer, labelling, libtorch itself, physics grasps, training, the run report and videos, and the web pages (over HTTP and in a browser).
+//! Each module covers one area end to end: the CLI's outputs and errors, depth input and clutter
+//! labels, evaluation, the mesh importer, labelling, libtorch itself, physics grasps, training,
+//! the run report and videos, and the web pages (over HTTP and in a browser).
 
 mod browser;
 mod cli;
 mod common;
+mod depth;
 mod eval;
 mod importer;
 mod label;

@@ -49,10 +49,12 @@ impl Clicker {
         }
     }
 
-    /// The click for one round, or why there is none (the round then fails).
+    /// The click for one round, or why there is none (the round then fails). The scripted
+    /// clicker plans on the round's object, mask id `id`; people may click any object.
     pub(super) fn click(
         &self,
         object: &str,
+        id: u16,
         round: u32,
         round_seed: u64,
         camera: &Camera,
@@ -65,7 +67,7 @@ impl Clicker {
             } => {
                 // A person clicks in 22.5° steps; plan in those steps too.
                 let config = OracleConfig::with_angles((180.0 / ANGLE_STEP_DEG) as u32);
-                let plan = match oracle::plan(camera, frame, 1, &config) {
+                let plan = match oracle::plan(camera, frame, id, &config) {
                     Ok(plan) => plan,
                     Err(e) => return Ok(Err(e.to_string())),
                 };

@@ -1,6 +1,8 @@
 //! `graspmap label`: collect grasp labels round by round, each verified by a simulated pick, resumable after any interruption.
 
+mod backfill;
 mod clicks;
+mod rounds;
 mod web;
 
 use std::path::PathBuf;
@@ -16,12 +18,12 @@ use super::Context;
 use crate::assets::objects::ObjectModel;
 use crate::commands::web::session::{AttemptView, LabelSession};
 use crate::commands::web::WebServer;
+use crate::data::depth::check_depth_files;
 use crate::data::labels::{Label, LabelStore, Labels, Progress};
 use crate::data::lock::StoreLock;
 use crate::grasp::world_grasp;
 use crate::metrics::FailureTally;
 use crate::sim::pick::PickReason;
-use crate::sim::{Workcell, WorkcellConfig};
 #[cfg(test)]
 pub(crate) use clicks::parse_clicks;
 use clicks::{check_enough_clicks, read_clicks, Clicker};
@@ -45,6 +47,10 @@ pub(crate) struct LabelConfig {
     pub(crate) check: bool,
     /// Only delete this label (object, k from 1), renumbering the object's later ones.
     pub(crate) delete: Option<(String, usize)>,
+    /// Objects dropped per round: the round's object and `clutter` − 1 others. Default 1.
+    pub(crate) clutter: u32,
+    /// Only write the depth files that an older dataset lacks.
+    pub(crate) backfill_depth: bool,
 }
 
 /// Where a round's click comes from.
@@ -89,6 +95,9 @@ struct ObjectSummary {
     new_labels: usize,
     /// Failed rounds of this run by reason.
     failures: FailureTally,
+    /// Labels of this run whose pick carried another object than the round's (clutter only):
+    /// stored under the round's object all the same (docs/data.md, "Clutter rounds").
+    lifted_other: usize,
 }
 
 #[derive(Debug, serde::Serialize)]
@@ -107,11 +116,15 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     if args.check {
         return check(context, &store, &context.objects.names());
     }
+    if args.backfill_depth {
+        return backfill::backfill_depth(context, &store).map(|_| ());
+    }
     let _writer = StoreLock::acquire(store.dir(), "label")?;
     if let Some((object, k)) = &args.delete {
         return delete(context, &store, object, *k);
     }
     let split = context.split()?;
+    check_clutter(args.clutter, &split.train)?;
     let models = context.objects.load_all(&split.train)?;
     let clicker = clicker(&args, &split.train)?;
     if let Clicker::Web { server, .. } = &clicker {
@@ -140,6 +153,7 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
         context,
         args: &args,
         store: &store,
+        write_depth: writes_depth(&store, &labels),
         clicker: &clicker,
         bar: &bar,
         verbose_rounds: !matches!(clicker, Clicker::Scripted { .. }),
@@ -244,20 +258,43 @@ fn finish(
     };
     print_summary(context, &results);
     if let Some(json) = &context.json {
-        let resolved = serde_json::json!({
-            "global": context,
-            "per_object": args.per_object,
-            "max_rounds": args.max_rounds,
-            "source": clicker.name(),
-            "clicks": match &args.source {
-                ClickSource::File(path) => Some(path),
-                _ => None,
-            },
-            "click_noise_px": args.noise.px,
-            "angle_noise_deg": args.noise.deg,
-            "train": train,
-        });
+        let resolved = resolved_config(context, args, clicker.name(), train);
         write_report(json, "label", args.seed, &resolved, &results)?;
+    }
+    Ok(())
+}
+
+/// The run's settings as the JSON report lists them.
+fn resolved_config(
+    context: &Context,
+    args: &LabelConfig,
+    source: &str,
+    train: &[String],
+) -> serde_json::Value {
+    serde_json::json!({
+        "global": context,
+        "per_object": args.per_object,
+        "max_rounds": args.max_rounds,
+        "source": source,
+        "clicks": match &args.source {
+            ClickSource::File(path) => Some(path),
+            _ => None,
+        },
+        "click_noise_px": args.noise.px,
+        "angle_noise_deg": args.noise.deg,
+        "clutter": args.clutter,
+        "train": train,
+    })
+}
+
+/// A round drops at most every training object once.
+fn check_clutter(clutter: u32, train: &[String]) -> anyhow::Result<()> {
+    if clutter as usize > train.len() {
+        bail!(
+            "--clutter {clutter}: the split has only {} training objects to drop (use 1 to {})",
+            train.len(),
+            train.len()
+        );
     }
     Ok(())
 }
@@ -306,6 +343,8 @@ struct ObjectJob<'a> {
     context: &'a Context,
     args: &'a LabelConfig,
     store: &'a LabelStore,
+    /// Store each label's depth image beside it (every dataset but an older one without them).
+    write_depth: bool,
     clicker: &'a Clicker,
     bar: &'a indicatif::ProgressBar,
     verbose_rounds: bool,
@@ -333,7 +372,7 @@ impl ObjectJob<'_> {
                     if j >= objects.len() || self.stop.load(Ordering::SeqCst) {
                         break;
                     }
-                    let outcome = self.label_object(j, &objects[j], &models[j], shared);
+                    let outcome = self.label_object(j, &objects[j], models, shared);
                     if outcome.is_err() {
                         self.stop.store(true, Ordering::SeqCst);
                     }
@@ -353,11 +392,10 @@ impl ObjectJob<'_> {
         &self,
         j: usize,
         object: &str,
-        model: &ObjectModel,
+        models: &[ObjectModel],
         shared: &Mutex<Shared>,
     ) -> anyhow::Result<ObjectSummary> {
         let args = self.args;
-        let config = WorkcellConfig::default();
         let mut summary = ObjectSummary {
             object: object.to_owned(),
             ..Default::default()
@@ -382,17 +420,16 @@ impl ObjectJob<'_> {
                     args.max_rounds
                 );
             }
-            let round_seed = args.seed + 100 * j as u64 + round as u64;
+            let round_seed = rounds::round_seed(args.seed, j, round);
             self.bar
                 .set_message(format!("{object} {have}/{} round {round}", args.per_object));
-            let mut cell = Workcell::new(&config)?;
-            cell.drop_objects(std::slice::from_ref(model), round_seed)?;
+            let (mut cell, id) = rounds::round_scene(models, j, args.clutter, round_seed)?;
             let frame = cell.capture();
             let camera = *cell.camera();
             let click = self
                 .clicker
-                .click(object, round, round_seed, &camera, &frame)?;
-            let (reason, detail, film) = self.try_click(&mut cell, &frame, &click);
+                .click(object, id, round, round_seed, &camera, &frame)?;
+            let (reason, detail, lifted, film) = self.try_click(&mut cell, &frame, &click);
             let line = round_line(object, round, &click, reason, &detail);
             round += 1;
             {
@@ -400,13 +437,18 @@ impl ObjectJob<'_> {
                 let Shared { labels, progress } = &mut *state;
                 let stored = matches!((reason, &click), (PickReason::Success, Ok(_)));
                 if let (true, Ok(grasp)) = (stored, &click) {
+                    // The round's object, whichever object the pick carried: the label is a
+                    // grasp that worked in this round's image (docs/data.md, "Clutter rounds").
+                    let depth = self.write_depth.then(|| frame.to_depth_image_mm());
                     self.store.append(
                         labels,
                         object,
                         Label::from(*grasp),
                         &frame.to_rgb_image(),
+                        depth.as_ref(),
                     )?;
                     summary.new_labels += 1;
+                    summary.lifted_other += usize::from(lifted.as_deref() != Some(object));
                     self.bar.inc(1);
                 } else {
                     summary.failures.add(reason.as_str());
@@ -438,17 +480,17 @@ impl ObjectJob<'_> {
 }
 
 impl ObjectJob<'_> {
-    /// Runs the clicked grasp in the simulator: its reason, detail, and (for the page) the
-    /// oblique view's frames.
+    /// Runs the clicked grasp in the simulator: its reason, detail, the object it carried, and
+    /// (for the page) the oblique view's frames.
     fn try_click(
         &self,
-        cell: &mut Workcell,
+        cell: &mut crate::sim::Workcell,
         frame: &crate::vision::render::Frame,
         click: &Result<crate::grasp::PixelGrasp, String>,
-    ) -> (PickReason, String, Vec<image::RgbImage>) {
+    ) -> (PickReason, String, Option<String>, Vec<image::RgbImage>) {
         let Ok(grasp) = click else {
             let why = click.as_ref().err().cloned().unwrap_or_default();
-            return (PickReason::Ungraspable, why, Vec::new());
+            return (PickReason::Ungraspable, why, None, Vec::new());
         };
         let filmed = matches!(self.clicker, Clicker::Web { .. });
         if filmed {
@@ -461,7 +503,7 @@ impl ObjectJob<'_> {
         } else {
             Vec::new()
         };
-        (outcome.reason, outcome.detail, film)
+        (outcome.reason, outcome.detail, outcome.object, film)
     }
 }
 
@@ -513,6 +555,21 @@ fn print_summary(context: &Context, results: &LabelResults) {
     ));
 }
 
+/// Whether new labels get depth files: yes unless the dataset already holds labels without
+/// them (made before depth files existed), which would leave it half with, half without.
+fn writes_depth(store: &LabelStore, labels: &Labels) -> bool {
+    let all = labels
+        .iter()
+        .all(|(object, list)| (1..=list.len()).all(|k| store.depth_path(object, k).exists()));
+    if !all {
+        tracing::warn!(
+            "{} has labels without depth images; new labels get none either (run `graspmap label --backfill-depth` first to add them)",
+            store.dir().display()
+        );
+    }
+    all
+}
+
 /// Where to continue: the rounds already run per object, from progress.json.
 fn resume_point(
     store: &LabelStore,
@@ -520,7 +577,8 @@ fn resume_point(
     args: &LabelConfig,
     train: &[String],
 ) -> anyhow::Result<Progress> {
-    let fresh = Progress::new(args.seed);
+    let mut fresh = Progress::new(args.seed);
+    fresh.clutter = args.clutter;
     let Some(mut progress) = store.load_progress()? else {
         if !labels.is_empty() {
             // A dataset from elsewhere (e.g. the reference tool): its rounds are unknown, so
@@ -551,13 +609,14 @@ fn resume_point(
         );
     }
     // Any click source may top a dataset up (scripted first, then fixed by hand): each
-    // label records its own. The seed decides every round's drop, so it must match.
-    if progress.seed != args.seed {
+    // label records its own. The seed and the clutter decide every round's drop, so they must
+    // match.
+    if progress.seed != args.seed || progress.clutter != args.clutter {
         bail!(
-            "the labels in {} were made with --seed {}; rerun with --seed {} to resume, or with --force to start over",
+            "the labels in {} were made with --seed {} --clutter {}; rerun with those settings to resume, or with --force to start over",
             store.dir().display(),
             progress.seed,
-            progress.seed
+            progress.clutter
         );
     }
     // A run killed between writing labels.json and progress.json: the label is there, its
@@ -603,7 +662,8 @@ fn delete(context: &Context, store: &LabelStore, object: &str, k: usize) -> anyh
 
 /// `label --check`: every problem on stdout, then exit 2 if there was any.
 fn check(context: &Context, store: &LabelStore, known: &[String]) -> anyhow::Result<()> {
-    let problems = store.check(known);
+    let mut problems = store.check(known);
+    problems.extend(check_depth_files(store));
     for problem in &problems {
         context.say(problem);
     }
