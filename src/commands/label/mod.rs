@@ -3,6 +3,7 @@
 mod backfill;
 mod clicks;
 mod rounds;
+mod store;
 mod web;
 
 use std::path::PathBuf;
@@ -18,7 +19,6 @@ use super::Context;
 use crate::assets::objects::ObjectModel;
 use crate::commands::web::session::{AttemptView, LabelSession};
 use crate::commands::web::WebServer;
-use crate::data::depth::check_depth_files;
 use crate::data::labels::{Label, LabelStore, Labels, Progress};
 use crate::data::lock::StoreLock;
 use crate::grasp::world_grasp;
@@ -26,7 +26,8 @@ use crate::metrics::FailureTally;
 use crate::sim::pick::PickReason;
 #[cfg(test)]
 pub(crate) use clicks::parse_clicks;
-use clicks::{check_enough_clicks, read_clicks, Clicker};
+use clicks::{read_clicks, Clicker};
+use store::{check, delete, prepare, writes_depth};
 
 /// One `graspmap label` run, resolved by the CLI.
 #[derive(Debug, Clone)]
@@ -203,39 +204,6 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
         return Err(interrupted.into());
     }
     finished(&outcome?)
-}
-
-/// Clears or repairs the store before the rounds: the labels and progress to continue from.
-fn prepare(
-    store: &LabelStore,
-    args: &LabelConfig,
-    clicker: &Clicker,
-    train: &[String],
-) -> anyhow::Result<(Labels, Progress)> {
-    if args.force {
-        store.clear()?;
-    }
-    store.remove_stale_temporaries()?;
-    store.remove_stale_staging()?;
-    let mut labels = store.load()?;
-    let mut progress = resume_point(store, &labels, args, train)?;
-    if let Clicker::File { clicks } = clicker {
-        check_enough_clicks(clicks, &labels, &progress, args, train)?;
-    }
-    labels.arrange(train);
-    for object in train {
-        let (rounds, recorded) = progress.entry(object);
-        progress.set_rounds(object, rounds, recorded);
-    }
-    // A run stopped between writing labels.json and progress.json left the round uncounted on
-    // disk; record the repaired count now, in case no later round writes it.
-    if store
-        .load_progress()?
-        .is_some_and(|on_disk| on_disk != progress)
-    {
-        store.save_progress(&progress)?;
-    }
-    Ok((labels, progress))
 }
 
 /// Prints the summary of a complete dataset and writes the JSON report.
@@ -553,138 +521,4 @@ fn print_summary(context: &Context, results: &LabelResults) {
         "{} labels in {} rounds in {} ({:.1} s)",
         results.total_labels, results.total_rounds, results.labels_dir, results.wall_seconds
     ));
-}
-
-/// Whether new labels get depth files: yes unless the dataset already holds labels without
-/// them (made before depth files existed), which would leave it half with, half without.
-fn writes_depth(store: &LabelStore, labels: &Labels) -> bool {
-    let all = labels
-        .iter()
-        .all(|(object, list)| (1..=list.len()).all(|k| store.depth_path(object, k).exists()));
-    if !all {
-        tracing::warn!(
-            "{} has labels without depth images; new labels get none either (run `graspmap label --backfill-depth` first to add them)",
-            store.dir().display()
-        );
-    }
-    all
-}
-
-/// Where to continue: the rounds already run per object, from progress.json.
-fn resume_point(
-    store: &LabelStore,
-    labels: &Labels,
-    args: &LabelConfig,
-    train: &[String],
-) -> anyhow::Result<Progress> {
-    let mut fresh = Progress::new(args.seed);
-    fresh.clutter = args.clutter;
-    let Some(mut progress) = store.load_progress()? else {
-        if !labels.is_empty() {
-            // A dataset from elsewhere (e.g. the reference tool): its rounds are unknown, so
-            // continue as if every earlier round had succeeded.
-            tracing::warn!(
-                "{} has labels but no progress file; continuing as if each label took one round",
-                store.dir().display()
-            );
-            let mut progress = fresh;
-            for object in train {
-                let n = labels.of(object).len() as u32;
-                progress.set_rounds(object, n, n);
-                progress.record_sources(object, "imported");
-            }
-            return Ok(progress);
-        }
-        return Ok(fresh);
-    };
-    if progress.schema != Progress::SCHEMA {
-        bail!(
-            "{} has schema '{}', expected '{}' (rerun with --force to start over)",
-            store
-                .dir()
-                .join(crate::data::labels::PROGRESS_FILE)
-                .display(),
-            progress.schema,
-            Progress::SCHEMA
-        );
-    }
-    // Any click source may top a dataset up (scripted first, then fixed by hand): each
-    // label records its own. The seed and the clutter decide every round's drop, so they must
-    // match.
-    if progress.seed != args.seed || progress.clutter != args.clutter {
-        bail!(
-            "the labels in {} were made with --seed {} --clutter {}; rerun with those settings to resume, or with --force to start over",
-            store.dir().display(),
-            progress.seed,
-            progress.clutter
-        );
-    }
-    // A run killed between writing labels.json and progress.json: the label is there, its
-    // round is not counted yet.
-    for object in train {
-        let (rounds, recorded) = progress.entry(object);
-        let stored = labels.of(object).len() as u32;
-        if stored == recorded + 1 {
-            progress.set_rounds(object, rounds + 1, stored);
-            // Its run stopped before it could say which source made it.
-            progress.record_sources(object, "unknown");
-        } else if stored != recorded {
-            bail!(
-                "{}: {object} has {stored} labels but progress.json records {recorded}; rerun with --force to start over",
-                store.dir().display()
-            );
-        }
-    }
-    Ok(progress)
-}
-
-/// `label --delete OBJECT:K`, under the writer lock.
-fn delete(context: &Context, store: &LabelStore, object: &str, k: usize) -> anyhow::Result<()> {
-    store.remove_stale_temporaries()?;
-    store.remove_stale_staging()?;
-    let mut labels = store.load()?;
-    // A dataset without progress.json (e.g. the reference tool's) stays without one.
-    let mut progress = store.load_progress()?;
-    store.delete_label(&mut labels, progress.as_mut(), object, k)?;
-    context.say(&format!(
-        "deleted {object} label {k} in {}; {} left for {object}, numbered 1..{}; the next `graspmap label` refills it",
-        store.dir().display(),
-        labels.of(object).len(),
-        labels.of(object).len()
-    ));
-    if let Some(json) = &context.json {
-        let resolved = serde_json::json!({ "global": context, "delete": [object, k] });
-        let results = serde_json::json!({ "labels_dir": store.dir(), "object": object, "deleted": k, "left": labels.of(object).len() });
-        write_report(json, "label", 0, &resolved, &results)?;
-    }
-    Ok(())
-}
-
-/// `label --check`: every problem on stdout, then exit 2 if there was any.
-fn check(context: &Context, store: &LabelStore, known: &[String]) -> anyhow::Result<()> {
-    let mut problems = store.check(known);
-    problems.extend(check_depth_files(store));
-    for problem in &problems {
-        context.say(problem);
-    }
-    if let Some(json) = &context.json {
-        let resolved = serde_json::json!({ "global": context, "check": true });
-        let results = serde_json::json!({ "labels_dir": store.dir(), "problems": problems });
-        write_report(json, "label", 0, &resolved, &results)?;
-    }
-    if !problems.is_empty() {
-        bail!(
-            "{} problem(s) in {}; fix or remove the listed files, or relabel with --force",
-            problems.len(),
-            store.dir().display()
-        );
-    }
-    let labels = store.load()?;
-    context.say(&format!(
-        "{}: {} labels for {} objects, no problems",
-        store.dir().display(),
-        labels.len(),
-        labels.iter().count()
-    ));
-    Ok(())
 }
