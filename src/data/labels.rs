@@ -445,7 +445,7 @@ pub(crate) struct ObjectProgress {
     pub(crate) labels: u32,
     /// The click source of each stored label, in label order (`scripted`, `file`,
     /// `interactive`, `web`; `imported` for labels from a dataset without progress.json,
-    /// `unknown` for one whose run was killed before it recorded its source). A dataset may
+    /// the run that resumed it for one whose run was killed before it recorded its source). A dataset may
     /// be topped up by another source, so these can differ.
     #[serde(default)]
     pub(crate) sources: Vec<String>,

@@ -412,14 +412,16 @@ fn deleting_a_label_renumbers_the_rest_and_the_next_round_refills_it() {
     let before = store.load().unwrap();
     let image = |k| std::fs::read(store.image_path("YcbTennisBall", k)).unwrap();
     let (second, third) = (image(2), image(3));
-    // A sidecar file of label 3 moves with it.
-    std::fs::write(
-        store
-            .image_path("YcbTennisBall", 3)
-            .with_file_name("YcbTennisBall_3_depth.png"),
-        b"d",
-    )
-    .unwrap();
+    // Its sidecar file (the depth image every label has) moves with it.
+    let depth = |k: usize| {
+        std::fs::read(
+            store
+                .image_path("YcbTennisBall", k)
+                .with_file_name(format!("YcbTennisBall_{k}_depth.png")),
+        )
+        .unwrap()
+    };
+    let third_depth = depth(3);
     let (status, png) = web.request("GET", "/api/labels/YcbTennisBall/2.png", None);
     assert_eq!(status, 200);
     assert!(png.contains("PNG"));
@@ -435,16 +437,11 @@ fn deleting_a_label_renumbers_the_rest_and_the_next_round_refills_it() {
     assert_eq!(image(2), third);
     assert_ne!(image(2), second);
     assert!(!store.image_path("YcbTennisBall", 3).exists());
-    assert!(store
-        .image_path("YcbTennisBall", 2)
-        .with_file_name("YcbTennisBall_2_depth.png")
+    assert_eq!(depth(2), third_depth);
+    assert!(!store
+        .image_path("YcbTennisBall", 3)
+        .with_file_name("YcbTennisBall_3_depth.png")
         .exists());
-    std::fs::remove_file(
-        store
-            .image_path("YcbTennisBall", 2)
-            .with_file_name("YcbTennisBall_2_depth.png"),
-    )
-    .unwrap();
 
     // The labelling loop wakes up and refills the gap with a new round.
     let state = web.wait_state(|s| s["phase"] == "waiting");

@@ -23,7 +23,7 @@ pub(super) fn prepare(
     store.remove_stale_temporaries()?;
     store.remove_stale_staging()?;
     let mut labels = store.load()?;
-    let mut progress = resume_point(store, &labels, args, train)?;
+    let mut progress = resume_point(store, &labels, args, clicker.name(), train)?;
     if let Clicker::File { clicks } = clicker {
         check_enough_clicks(clicks, &labels, &progress, args, train)?;
     }
@@ -33,11 +33,10 @@ pub(super) fn prepare(
         progress.set_rounds(object, rounds, recorded);
     }
     // A run stopped between writing labels.json and progress.json left the round uncounted on
-    // disk; record the repaired count now, in case no later round writes it.
-    if store
-        .load_progress()?
-        .is_some_and(|on_disk| on_disk != progress)
-    {
+    // disk; record the repaired count now, in case no later round writes it. A new dataset
+    // gets its progress.json before the first label, so a run killed right after that label
+    // is resumed as this run, not mistaken for a dataset from elsewhere.
+    if store.load_progress()?.as_ref() != Some(&progress) {
         store.save_progress(&progress)?;
     }
     Ok((labels, progress))
@@ -63,6 +62,7 @@ fn resume_point(
     store: &LabelStore,
     labels: &Labels,
     args: &LabelConfig,
+    source: &str,
     train: &[String],
 ) -> anyhow::Result<Progress> {
     let mut fresh = Progress::new(args.seed);
@@ -114,8 +114,10 @@ fn resume_point(
         let stored = labels.of(object).len() as u32;
         if stored == recorded + 1 {
             progress.set_rounds(object, rounds + 1, stored);
-            // Its run stopped before it could say which source made it.
-            progress.record_sources(object, "unknown");
+            // Its run stopped before it could record which source made it; the run that
+            // resumes is almost always the same command, so it is credited with it (and a
+            // resumed dataset is byte-identical to an uninterrupted one).
+            progress.record_sources(object, source);
         } else if stored != recorded {
             bail!(
                 "{}: {object} has {stored} labels but progress.json records {recorded}; rerun with --force to start over",
