@@ -41,3 +41,20 @@ pub fn send_signal(child: &std::process::Child, signal: i32) {
     // SAFETY: kill only sends a signal to the given PID.
     assert_eq!(unsafe { libc::kill(child.id() as i32, signal) }, 0);
 }
+
+/// Every file of a labels dir but the writer's lock (it holds a PID), by name, with its bytes.
+pub fn snapshot(dir: &std::path::Path) -> Vec<(String, Vec<u8>)> {
+    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .filter(|e| e.file_name() != ".lock")
+        .map(|e| {
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect();
+    files.sort();
+    files
+}

@@ -54,22 +54,9 @@ impl Workspace {
         self.command(args).output().unwrap()
     }
 
-    /// Every file of the labels dir but the writer's lock (it holds a PID), by name, with its
-    /// bytes.
+    /// Every file of the labels dir but the writer's lock, by name, with its bytes.
     fn snapshot(&self) -> Vec<(String, Vec<u8>)> {
-        let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(self.labels())
-            .unwrap()
-            .flatten()
-            .filter(|e| e.file_name() != ".lock")
-            .map(|e| {
-                (
-                    e.file_name().to_string_lossy().into_owned(),
-                    std::fs::read(e.path()).unwrap(),
-                )
-            })
-            .collect();
-        files.sort();
-        files
+        super::common::snapshot(&self.labels())
     }
 }
 

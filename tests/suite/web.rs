@@ -15,7 +15,7 @@ use graspmap::policy::oracle::{self, OracleConfig};
 use graspmap::sim::Workcell;
 use graspmap::vision::camera::Camera;
 
-use super::common::send_signal;
+use super::common::{send_signal, snapshot};
 
 pub const BIN: &str = env!("CARGO_BIN_EXE_graspmap");
 
@@ -463,23 +463,6 @@ fn deleting_a_label_renumbers_the_rest_and_the_next_round_refills_it() {
     assert!(check.status.success(), "{check:?}");
 }
 
-/// Every file in the labels dir but the lock, by name.
-fn snapshot(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut files: Vec<(String, Vec<u8>)> = std::fs::read_dir(dir)
-        .unwrap()
-        .flatten()
-        .filter(|e| e.file_name() != ".lock")
-        .map(|e| {
-            (
-                e.file_name().to_string_lossy().into_owned(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
-        .collect();
-    files.sort();
-    files
-}
-
 #[test]
 fn a_delete_killed_at_any_step_leaves_the_old_or_the_new_dataset_and_both_pass_check() {
     let mut web = labelled("3");
@@ -694,4 +677,42 @@ fn report_serve_shows_the_report_and_the_labels_and_deletes_only_under_the_lock(
     );
     send_signal(&child, libc::SIGINT);
     assert!(child.wait().unwrap().success());
+}
+
+#[test]
+fn another_host_warns_and_still_refuses_host_names_that_are_not_ours() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("split.json"),
+        r#"{"train": ["YcbTennisBall"], "test": []}"#,
+    )
+    .unwrap();
+    let mut web = WebLabeller::start_in(
+        dir,
+        &["YcbTennisBall"],
+        &["--per-object", "1", "--host", "0.0.0.0"],
+    );
+    let port = web.address.rsplit(':').next().unwrap().to_owned();
+    let get = |host: &str| {
+        raw(
+            &web.address,
+            "GET",
+            "/api/state",
+            &format!("Host: {host}\r\n"),
+            None,
+        )
+        .0
+    };
+    assert_eq!(get(&format!("127.0.0.1:{port}")), 200);
+    assert_eq!(get(&format!("localhost:{port}")), 200);
+    // Reached over the network by its address: an IP literal cannot be a rebinding name.
+    assert_eq!(get(&format!("192.0.2.7:{port}")), 200);
+    assert_eq!(get(&format!("evil.example:{port}")), 403);
+    assert_eq!(get("192.0.2.7:1"), 403);
+    let out = web.stop();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("other machines on the network") && stderr.contains("--host 127.0.0.1"),
+        "{stderr}"
+    );
 }

@@ -166,27 +166,37 @@ impl WebServer {
         format!("http://{}/", self.host_port())
     }
 
+    /// `IP:PORT` as a browser is told to open it: loopback when bound to every interface.
     fn host_port(&self) -> String {
+        if self.address.ip().is_unspecified() {
+            return format!("127.0.0.1:{}", self.address.port());
+        }
         match self.address.ip() {
             IpAddr::V6(ip) => format!("[{ip}]:{}", self.address.port()),
             IpAddr::V4(ip) => format!("{ip}:{}", self.address.port()),
         }
     }
 
-    /// The Host values that name this server: the bound address, and localhost on loopback.
-    fn allowed_hosts(&self) -> Vec<String> {
+    /// Whether a Host value names this server: the bound address, and `localhost` and
+    /// `127.0.0.1` on loopback. Bound to every interface (0.0.0.0 or ::), any IP address with
+    /// the port is accepted too, since the machine's own addresses are not known here; a DNS
+    /// rebinding page always sends its own host *name*, which stays refused.
+    fn names_this_server(&self, host: &str) -> bool {
         let port = self.address.port();
-        let mut hosts = vec![self.host_port()];
-        if self.address.ip().is_loopback() {
-            hosts.push(format!("localhost:{port}"));
-            hosts.push(format!("127.0.0.1:{port}"));
+        let ip = self.address.ip();
+        let mut names = vec![self.host_port()];
+        if ip.is_loopback() || ip.is_unspecified() {
+            names.push(format!("localhost:{port}"));
+            names.push(format!("127.0.0.1:{port}"));
         }
-        hosts
+        if names.iter().any(|n| n.eq_ignore_ascii_case(host)) {
+            return true;
+        }
+        ip.is_unspecified() && host.parse::<SocketAddr>().is_ok_and(|a| a.port() == port)
     }
 
     /// Serves `routes` (tried in order) until `stop` says so; checks it every 100 ms.
     pub(crate) fn serve(&self, routes: &[&Route<'_>], stop: &dyn Fn() -> bool) {
-        let allowed = self.allowed_hosts();
         while !stop() {
             let mut request = match self.server.recv_timeout(Duration::from_millis(100)) {
                 Ok(Some(request)) => request,
@@ -196,7 +206,7 @@ impl WebServer {
                     continue;
                 }
             };
-            let reply = match guard(&request, &allowed).and_then(|()| read_body(&mut request)) {
+            let reply = match self.guard(&request).and_then(|()| read_body(&mut request)) {
                 Ok(body) => route(
                     &Request {
                         method: request.method().as_str().to_owned(),
@@ -222,43 +232,45 @@ impl WebServer {
     }
 }
 
-/// Refuses requests that are not for this server (Host, Origin) or too large.
-fn guard(request: &tiny_http::Request, allowed: &[String]) -> Result<(), Reply> {
-    let header = |name: &'static str| {
-        request
-            .headers()
-            .iter()
-            .find(|h| h.field.equiv(name))
-            .map(|h| h.value.as_str().to_owned())
-    };
-    let host = header("Host").unwrap_or_default();
-    if !allowed.iter().any(|a| a.eq_ignore_ascii_case(&host)) {
-        return Err(Reply::error(
-            403,
-            &format!(
-                "Host '{host}' is not this server; open http://{} instead",
-                allowed[0]
-            ),
-        ));
-    }
-    if let Some(origin) = header("Origin") {
-        let ours = allowed
-            .iter()
-            .any(|a| origin.eq_ignore_ascii_case(&format!("http://{a}")));
-        if !ours {
+impl WebServer {
+    /// Refuses requests that are not for this server (Host, Origin) or too large.
+    fn guard(&self, request: &tiny_http::Request) -> Result<(), Reply> {
+        let header = |name: &'static str| {
+            request
+                .headers()
+                .iter()
+                .find(|h| h.field.equiv(name))
+                .map(|h| h.value.as_str().to_owned())
+        };
+        let host = header("Host").unwrap_or_default();
+        if !self.names_this_server(&host) {
             return Err(Reply::error(
                 403,
-                &format!("requests from the page at '{origin}' are refused"),
+                &format!(
+                    "Host '{host}' is not this server; open http://{} instead",
+                    self.host_port()
+                ),
             ));
         }
+        if let Some(origin) = header("Origin") {
+            let ours = origin
+                .strip_prefix("http://")
+                .is_some_and(|o| self.names_this_server(o));
+            if !ours {
+                return Err(Reply::error(
+                    403,
+                    &format!("requests from the page at '{origin}' are refused"),
+                ));
+            }
+        }
+        if request.body_length().is_some_and(|n| n > MAX_BODY_BYTES) {
+            return Err(Reply::error(
+                413,
+                &format!("the body is larger than {MAX_BODY_BYTES} bytes"),
+            ));
+        }
+        Ok(())
     }
-    if request.body_length().is_some_and(|n| n > MAX_BODY_BYTES) {
-        return Err(Reply::error(
-            413,
-            &format!("the body is larger than {MAX_BODY_BYTES} bytes"),
-        ));
-    }
-    Ok(())
 }
 
 /// The first route that knows the path answers; the stylesheet is shared by all pages.
