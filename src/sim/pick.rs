@@ -33,8 +33,9 @@ pub(crate) const OBJECT_FORCE_LIMIT: f32 = 150.0;
 /// Penetration into the totes or ground that counts as a collision (m).
 pub(crate) const ENVIRONMENT_PENETRATION: f32 = 0.002;
 /// An object pushed this deep into the totes or ground during a guarded move stops the arm
-/// (m), counted from where it was when the move began.
-pub(crate) const OBJECT_PRESSED_DEPTH: f32 = 0.005;
+/// (m), counted from where it was when the move began. The guard looks after each step, and a
+/// descending finger moves 2.1 mm a step, so this leaves that much room below the soak's 5 mm.
+pub(crate) const OBJECT_PRESSED_DEPTH: f32 = 0.0025;
 /// Below this opening the fingers count as fully closed (m).
 pub(crate) const CLOSED_OPENING: f32 = 0.004;
 /// Longest wait for the fingers to open (s).
