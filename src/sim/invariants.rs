@@ -23,8 +23,14 @@ impl Workcell {
             .unwrap_or_default()
     }
 
+    /// Names what the workcell does from now on, for the violations' messages.
+    pub(super) fn enter(&mut self, phase: &'static str) {
+        self.phase = phase;
+    }
+
     pub(super) fn check_invariants(&mut self) {
         let t = self.time();
+        let phase = self.phase;
         let mut found = Vec::new();
         for object in &self.objects {
             let body = &self.world.bodies[object.body];
@@ -35,15 +41,20 @@ impl Workcell {
                 && body.angvel().is_finite();
             if !finite {
                 found.push(format!(
-                    "t {t:.3} s: {name} has a non-finite pose or velocity"
+                    "t {t:.3} s ({phase}): {name} has a non-finite pose or velocity"
                 ));
                 continue;
             }
             let sunk = self.environment_penetration(object.collider);
             if sunk > MAX_SINK {
+                let at = body.translation();
                 found.push(format!(
-                    "t {t:.3} s: {name} is {:.1} mm inside the ground or a tote",
-                    sunk * 1e3
+                    "t {t:.3} s ({phase}): {name} is {:.1} mm inside the ground or a tote, at ({:.3}, {:.3}, {:.3}) m moving {:.2} m/s",
+                    sunk * 1e3,
+                    at.x,
+                    at.y,
+                    at.z,
+                    body.linvel().length()
                 ));
             }
         }

@@ -36,6 +36,9 @@ pub(crate) const ENVIRONMENT_PENETRATION: f32 = 0.002;
 /// (m), counted from where it was when the move began. The guard looks after each step, and a
 /// descending finger moves 2.1 mm a step, so this leaves that much room below the soak's 5 mm.
 pub(crate) const OBJECT_PRESSED_DEPTH: f32 = 0.0025;
+/// How deep an object may rest in the tote before the pressed-object guard counts from its
+/// depth instead (m).
+const RESTING_SINK: f32 = 0.0015;
 /// Below this opening the fingers count as fully closed (m).
 pub(crate) const CLOSED_OPENING: f32 = 0.004;
 /// Longest wait for the fingers to open (s).
@@ -53,6 +56,11 @@ const RECOVER_TCP_HEIGHT: f32 = 0.25;
 const RECOVER_BACKOFF: f32 = 0.1;
 /// Distance within which a pad counts as touching an object (m).
 const TOUCH_GAP: f32 = 0.002;
+/// A guarded move slows to this fraction of its speed while the hand is within [`CREEP_GAP`] of
+/// an object.
+const CREEP_RATE: f64 = 0.2;
+/// How near the hand must come to an object for a guarded move to creep (m).
+const CREEP_GAP: f32 = 0.01;
 
 /// Why an attempt ended the way it did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -201,23 +209,28 @@ impl Workcell {
             .map(|i| self.object_pose(i).translation.z)
             .collect();
         let guard = Guard { objects: true };
+        self.enter("open");
         self.gripper.open(&mut self.world);
         self.wait_for_fingers(OPEN_WAIT);
         self.trace("opened");
+        self.enter("approach");
         if let Err(stop) = self.move_joints(approach_q, guard) {
             return self.abort(stop);
         }
         self.trace("approached");
+        self.enter("descend");
         if let Err(stop) = self.move_line(&ur5, grasp_tool0(grasp.tcp, closing), guard) {
             return self.abort(stop);
         }
         tracing::debug!(?closing, "intended closing direction");
         self.trace("descended");
+        self.enter("close");
         self.gripper.close(&mut self.world);
         self.wait_for_fingers(CLOSE_WAIT);
         self.gripper.hold(&mut self.world);
         self.trace("closed");
         let carry = Guard { objects: false };
+        self.enter("lift");
         if let Err(stop) = self.move_line(&ur5, grasp_tool0(above, closing), carry) {
             return self.abort(stop);
         }
@@ -226,6 +239,7 @@ impl Workcell {
             self.recover();
             return failure;
         }
+        self.enter("carry home");
         if let Err(stop) = self.move_joints(HOME_JOINTS, carry) {
             return self.abort(stop);
         }
@@ -240,12 +254,16 @@ impl Workcell {
         // Place: carry to bin 2, release, and come back.
         // A collision on the way to bin 2 stops the arm; the object is released wherever it is,
         // and `placed` reports where it came to rest.
+        self.enter("carry to bin 2");
         let _ = self.move_joints(PLACE_JOINTS, carry);
         let at_place = self.object_pose(held).translation;
+        self.enter("release");
         self.gripper.open(&mut self.world);
         self.wait_for_fingers(OPEN_WAIT);
         self.hold_for(RELEASE_WAIT);
+        self.enter("return");
         self.recover_home();
+        self.enter("settle");
         self.settle(AFTER_ATTEMPT_SETTLE);
         // Where the object was when the hand reached the place pose tells a drop on the way
         // (on the floor already) from a bounce out of bin 2.
@@ -340,6 +358,7 @@ impl Workcell {
 
     /// After a failed attempt: open, back straight up, and return home, without collision stops.
     fn recover(&mut self) {
+        self.enter("recover");
         self.gripper.open(&mut self.world);
         self.wait_for_fingers(OPEN_WAIT);
         let ur5 = Ur5::new(to_isometry(&Pose::from_translation(super::ROBOT_BASE)));
@@ -351,6 +370,7 @@ impl Workcell {
             + RECOVER_BACKOFF;
         let _ = self.move_line_unchecked(&ur5, up);
         self.recover_home();
+        self.enter("settle");
         self.settle(AFTER_ATTEMPT_SETTLE);
     }
 
@@ -462,10 +482,10 @@ impl Workcell {
         guard: Option<Guard>,
     ) -> Result<(), Option<Stop>> {
         let dt = 1.0 / PHYSICS_HZ as f64;
-        let steps = (duration / dt).ceil() as u64;
+        let guards_objects = guard.is_some_and(|g| g.objects);
         // Objects may rest a little sunk (under a heavier one, against a wall); only what the
         // move adds counts. Only moves that guard objects look at it.
-        let sunk_before: Vec<f32> = if guard.is_some_and(|g| g.objects) {
+        let sunk_before: Vec<f32> = if guards_objects {
             self.objects
                 .iter()
                 .map(|o| self.environment_penetration(o.collider))
@@ -473,8 +493,19 @@ impl Workcell {
         } else {
             Vec::new()
         };
-        for i in 1..=steps {
-            let t = (i as f64 * dt).min(duration);
+        let mut t = 0.0;
+        let mut i = 0u64;
+        while t < duration {
+            i += 1;
+            // Near an object a guarded move creeps, as a robot's force-guarded approach does: at
+            // full speed one step presses a finger 2 mm into an object, or the object 5 mm into
+            // the floor, before any check can stop it.
+            let rate = if guards_objects && self.hand_near_object(CREEP_GAP) {
+                CREEP_RATE
+            } else {
+                1.0
+            };
+            t = (t + dt * rate).min(duration);
             let q = path(t).ok_or(None)?;
             let previous = self.arm.joints;
             self.drive_arm(q);
@@ -502,6 +533,20 @@ impl Workcell {
         Ok(())
     }
 
+    /// Whether a finger or the palm is within `gap` of any object.
+    fn hand_near_object(&self, gap: f32) -> bool {
+        self.gripper
+            .finger_colliders
+            .iter()
+            .flatten()
+            .chain([&self.gripper.palm_collider])
+            .any(|&part| {
+                self.objects
+                    .iter()
+                    .any(|o| in_contact(&self.world, part, o.collider, gap))
+            })
+    }
+
     /// The first guarded contact, described, if any.
     fn collision(&self, guard: Guard, sunk_before: &[f32]) -> Option<CollisionStop> {
         for &c in self
@@ -522,18 +567,13 @@ impl Workcell {
         if guard.objects {
             // Forces on an object scale with its mass in rapier's soft contacts, so a pad coming
             // down on a 28 g brick never reaches the force limit: it sinks the brick into the
-            // floor instead. How deep an object is pushed into the tote stands in for the force.
+            // floor instead. How deep an object is pushed into the tote stands in for the force,
+            // for any object: a finger on the drill may press the banana under it.
             for (object, &before) in self.objects.iter().zip(sunk_before) {
+                // Counted from where it lay, but never from deeper than a light object rests:
+                // one already sunk under a heavier neighbour has less room left before 5 mm.
                 let sunk = self.environment_penetration(object.collider);
-                if sunk - before > OBJECT_PRESSED_DEPTH
-                    && self
-                        .gripper
-                        .finger_colliders
-                        .iter()
-                        .flatten()
-                        .chain([&self.gripper.palm_collider])
-                        .any(|&part| in_contact(&self.world, part, object.collider, TOUCH_GAP))
-                {
+                if sunk - before.min(RESTING_SINK) > OBJECT_PRESSED_DEPTH {
                     tracing::debug!(object = %object.model.name, sunk, before, tool0 = ?self.tool0_pose().translation, "pressed into the tote");
                     return Some(CollisionStop::PressedIntoTote {
                         object: object.model.name.clone(),
