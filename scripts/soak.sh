@@ -4,13 +4,16 @@
 # body's pose and velocity are finite and no object is sunk more than 5 mm into the ground or a
 # tote, and that every attempt ends with a reason and the process with no panic.
 # Usage: scripts/soak.sh N [M] [SEED]   (M model scenes, default N/10; SEED picks the scenes)
+#   GRASPMAP=path/to/graspmap  use that binary instead of building target/release/graspmap
+#   DATA=DIR  the data dir whose model the model scenes use (default data, as ./demo.sh leaves it)
 # Prints each violation with the seed and attempt that reproduce it, and exits 1 if any.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 n=${1:?usage: scripts/soak.sh N [MODEL_SCENES] [SEED]}
 m=${2:-$((n / 10))}
 seed=${3:-$RANDOM}
-bin=target/release/graspmap
+bin=${GRASPMAP:-target/release/graspmap}
+data=${DATA:-data}
 [ -x "$bin" ] || cargo build --release --locked
 out=$(mktemp -d)
 # Distinct seeds from one generator, so a run is repeatable from its SEED.
@@ -27,7 +30,7 @@ sweep() {
   for chunk in "${all[*]:0:$half}" "${all[*]:$half}"; do
     [ -n "$chunk" ] || continue
     part=$((part + 1))
-    "$bin" --quiet --threads 1 --json "$out/$policy-$part.json" eval --task empty_bin \
+    "$bin" --data "$data" --quiet --threads 1 --json "$out/$policy-$part.json" eval --task empty_bin \
       --policy "$policy" --seeds "${chunk// /,}" --check-invariants \
       >"$out/$policy-$part.log" 2>"$out/$policy-$part.err" &
     pids+=($!)
@@ -66,10 +69,10 @@ PY
 }
 sweep random "$n" || status=1
 if [ "$m" -gt 0 ]; then
-  if [ -f data/affordance/best.safetensors ]; then
+  if [ -f "$data/affordance/best.safetensors" ]; then
     sweep model "$m" || status=1
   else
-    echo "soak: no data/affordance/best.safetensors; run ./demo.sh first for the model scenes" >&2
+    echo "soak: no $data/affordance/best.safetensors; run ./demo.sh first for the model scenes" >&2
     status=1
   fi
 fi

@@ -402,9 +402,21 @@ impl Workcell {
 
     /// How deep `collider` is sunk into the environment (m); 0 when apart.
     pub(crate) fn environment_penetration(&self, collider: ColliderHandle) -> f32 {
+        self.environment_penetration_beyond(collider, f32::NEG_INFINITY)
+    }
+
+    /// How deep `collider` is sunk into the environment (m), measured only against the boxes
+    /// whose contact points (from before the last step) read deeper than `screen`; 0 otherwise.
+    /// The exact query costs more than a step when run for every object, so a check made every
+    /// step screens with the contact points first.
+    pub(crate) fn environment_penetration_beyond(
+        &self,
+        collider: ColliderHandle,
+        screen: f32,
+    ) -> f32 {
         self.environment
             .iter()
-            .map(|&env| penetration(&self.world, env, collider))
+            .map(|&env| penetration(&self.world, env, collider, screen))
             .fold(0.0, f32::max)
     }
 
@@ -416,15 +428,24 @@ impl Workcell {
     }
 }
 
-/// How deep two colliders overlap (m), at their poses now; 0 when apart.
-pub(crate) fn penetration(world: &PhysicsWorld, a: ColliderHandle, b: ColliderHandle) -> f32 {
-    // The narrow phase's pair only says the two are near. Its points come from before the
-    // step's solve and, with a compound against a thin box, can be tens of millimetres off
-    // (an 86 mm reading for a pear 9 mm into the floor), so the depth is measured afresh.
-    let touching = world
-        .contact_pair(a, b)
-        .is_some_and(|pair| pair.manifolds().iter().any(|m| !m.points.is_empty()));
-    if !touching {
+/// How deep two colliders overlap (m), at their poses now; 0 when apart, or when none of the
+/// narrow phase's contact points reads deeper than `screen` (m; −∞ takes any point).
+pub(crate) fn penetration(
+    world: &PhysicsWorld,
+    a: ColliderHandle,
+    b: ColliderHandle,
+    screen: f32,
+) -> f32 {
+    // The narrow phase's points come from before the step's solve and, with a compound against
+    // a thin box, can be tens of millimetres off (an 86 mm reading for a pear 11 mm into the
+    // floor), so they only screen, and the depth is measured afresh.
+    let near = world.contact_pair(a, b).is_some_and(|pair| {
+        pair.manifolds()
+            .iter()
+            .flat_map(|m| m.points.iter())
+            .any(|p| -p.dist > screen)
+    });
+    if !near {
         return 0.0;
     }
     let (a, b) = (&world.colliders[a], &world.colliders[b]);

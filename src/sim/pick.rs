@@ -39,6 +39,9 @@ pub(crate) const OBJECT_PRESSED_DEPTH: f32 = 0.0025;
 /// How deep an object may rest in the tote before the pressed-object guard counts from its
 /// depth instead (m).
 const RESTING_SINK: f32 = 0.0015;
+/// Objects whose contact points read shallower than this (m) skip the guard's exact depth
+/// query: a step moves a pressed object well under the guard's 2.5 mm.
+const GUARD_SCREEN_DEPTH: f32 = 0.0005;
 /// Below this opening the fingers count as fully closed (m).
 pub(crate) const CLOSED_OPENING: f32 = 0.004;
 /// Longest wait for the fingers to open (s).
@@ -572,7 +575,7 @@ impl Workcell {
             for (object, &before) in self.objects.iter().zip(sunk_before) {
                 // Counted from where it lay, but never from deeper than a light object rests:
                 // one already sunk under a heavier neighbour has less room left before 5 mm.
-                let sunk = self.environment_penetration(object.collider);
+                let sunk = self.environment_penetration_beyond(object.collider, GUARD_SCREEN_DEPTH);
                 if sunk - before.min(RESTING_SINK) > OBJECT_PRESSED_DEPTH {
                     tracing::debug!(object = %object.model.name, sunk, before, tool0 = ?self.tool0_pose().translation, "pressed into the tote");
                     return Some(CollisionStop::PressedIntoTote {
