@@ -6,6 +6,7 @@
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use rapier3d::math::{Pose, Rotation, Vector};
 
+use super::guard::{CollisionStop, Guard, CREEP_GAP, CREEP_RATE, TOUCH_GAP};
 use super::{in_contact, ObjectLocation, Workcell, PHYSICS_HZ};
 use crate::grasp::gripper::GRIPPER;
 use crate::grasp::WorldGrasp;
@@ -27,21 +28,6 @@ pub(crate) const LINE_ACCELERATION: f64 = 2.0;
 pub(crate) const APPROACH_HEIGHT: f32 = 0.3;
 /// Height an object must rise for a grasp to count (m).
 pub(crate) const LIFT_SUCCESS_HEIGHT: f32 = 0.2;
-/// A force this large between the arm (or fingers) and an object stops the arm (N): the
-/// UR5's default protective-stop force.
-pub(crate) const OBJECT_FORCE_LIMIT: f32 = 150.0;
-/// Penetration into the totes or ground that counts as a collision (m).
-pub(crate) const ENVIRONMENT_PENETRATION: f32 = 0.002;
-/// An object pushed this deep into the totes or ground during a guarded move stops the arm
-/// (m), counted from where it was when the move began. The guard looks after each step, and a
-/// descending finger moves 2.1 mm a step, so this leaves that much room below the soak's 5 mm.
-pub(crate) const OBJECT_PRESSED_DEPTH: f32 = 0.0025;
-/// How deep an object may rest in the tote before the pressed-object guard counts from its
-/// depth instead (m).
-const RESTING_SINK: f32 = 0.0015;
-/// Objects whose contact points read shallower than this (m) skip the guard's exact depth
-/// query: a step moves a pressed object well under the guard's 2.5 mm.
-const GUARD_SCREEN_DEPTH: f32 = 0.0005;
 /// Below this opening the fingers count as fully closed (m).
 pub(crate) const CLOSED_OPENING: f32 = 0.004;
 /// Longest wait for the fingers to open (s).
@@ -57,13 +43,6 @@ const AFTER_ATTEMPT_SETTLE: f32 = 2.0;
 const RECOVER_TCP_HEIGHT: f32 = 0.25;
 /// See [`RECOVER_TCP_HEIGHT`] (m).
 const RECOVER_BACKOFF: f32 = 0.1;
-/// Distance within which a pad counts as touching an object (m).
-const TOUCH_GAP: f32 = 0.002;
-/// A guarded move slows to this fraction of its speed while the hand is within [`CREEP_GAP`] of
-/// an object.
-const CREEP_RATE: f64 = 0.2;
-/// How near the hand must come to an object for a guarded move to creep (m).
-const CREEP_GAP: f32 = 0.01;
 
 /// Why an attempt ended the way it did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -128,43 +107,9 @@ impl PickOutcome {
     }
 }
 
-/// What stopped the arm: the protective stops of a real UR5 and the gripper's guard.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub(crate) enum CollisionStop {
-    /// An arm link or the palm entered a tote or the ground.
-    #[error("the arm hit the bin or the ground")]
-    ArmHitEnvironment,
-    /// A finger entered a tote or the ground.
-    #[error("a finger hit the bin or the ground")]
-    FingerHitEnvironment,
-    /// A light object touched by the gripper sank deeper into the tote.
-    #[error("the gripper pressed {object} into the tote")]
-    PressedIntoTote {
-        /// The object's name.
-        object: String,
-    },
-    /// A part pushed on an object harder than the protective-stop force.
-    #[error("the {part} pressed on {object} with {force:.0} N")]
-    Pressed {
-        /// "arm", "palm" or "finger".
-        part: &'static str,
-        /// The object's name.
-        object: String,
-        /// The contact force (N).
-        force: f32,
-    },
-}
-
 enum Stop {
     Collision(CollisionStop),
     Ik(IkError),
-}
-
-/// What may not be touched during a motion.
-#[derive(Clone, Copy)]
-struct Guard {
-    /// Check pushing forces on objects (off while carrying one).
-    objects: bool,
 }
 
 impl Workcell {
@@ -254,11 +199,15 @@ impl Workcell {
             }
         };
         let lift_at_home = self.lift_of(held, &heights_before);
-        // Place: carry to bin 2, release, and come back.
-        // A collision on the way to bin 2 stops the arm; the object is released wherever it is,
-        // and `placed` reports where it came to rest.
+        self.place(held, lift_at_home)
+    }
+
+    /// Carries the held object to bin 2, releases it and comes back: a success, wherever the
+    /// object comes to rest (`placed` reports where). A collision on the way to bin 2 stops the
+    /// arm, and the object is released wherever it is.
+    fn place(&mut self, held: usize, lift_at_home: f32) -> PickOutcome {
         self.enter("carry to bin 2");
-        let _ = self.move_joints(PLACE_JOINTS, carry);
+        let _ = self.move_joints(PLACE_JOINTS, Guard { objects: false });
         let at_place = self.object_pose(held).translation;
         self.enter("release");
         self.gripper.open(&mut self.world);
@@ -513,7 +462,7 @@ impl Workcell {
             let previous = self.arm.joints;
             self.drive_arm(q);
             self.step();
-            if i % 12 == 0 && tracing::enabled!(tracing::Level::TRACE) {
+            if i.is_multiple_of(12) && tracing::enabled!(tracing::Level::TRACE) {
                 let forces: Vec<f32> = self
                     .gripper
                     .pads
@@ -534,88 +483,6 @@ impl Workcell {
             }
         }
         Ok(())
-    }
-
-    /// Whether a finger or the palm is within `gap` of any object.
-    fn hand_near_object(&self, gap: f32) -> bool {
-        self.gripper
-            .finger_colliders
-            .iter()
-            .flatten()
-            .chain([&self.gripper.palm_collider])
-            .any(|&part| {
-                self.objects
-                    .iter()
-                    .any(|o| in_contact(&self.world, part, o.collider, gap))
-            })
-    }
-
-    /// The first guarded contact, described, if any.
-    fn collision(&self, guard: Guard, sunk_before: &[f32]) -> Option<CollisionStop> {
-        for &c in self
-            .arm
-            .colliders
-            .iter()
-            .chain([&self.gripper.palm_collider])
-        {
-            if self.touches_environment(c, ENVIRONMENT_PENETRATION) {
-                return Some(CollisionStop::ArmHitEnvironment);
-            }
-        }
-        for &c in self.gripper.finger_colliders.iter().flatten() {
-            if self.touches_environment(c, ENVIRONMENT_PENETRATION) {
-                return Some(CollisionStop::FingerHitEnvironment);
-            }
-        }
-        if guard.objects {
-            // Forces on an object scale with its mass in rapier's soft contacts, so a pad coming
-            // down on a 28 g brick never reaches the force limit: it sinks the brick into the
-            // floor instead. How deep an object is pushed into the tote stands in for the force,
-            // for any object: a finger on the drill may press the banana under it.
-            for (object, &before) in self.objects.iter().zip(sunk_before) {
-                // Counted from where it lay, but never from deeper than a light object rests:
-                // one already sunk under a heavier neighbour has less room left before 5 mm.
-                let sunk = self.environment_penetration_beyond(object.collider, GUARD_SCREEN_DEPTH);
-                if sunk - before.min(RESTING_SINK) > OBJECT_PRESSED_DEPTH {
-                    tracing::debug!(object = %object.model.name, sunk, before, tool0 = ?self.tool0_pose().translation, "pressed into the tote");
-                    return Some(CollisionStop::PressedIntoTote {
-                        object: object.model.name.clone(),
-                    });
-                }
-            }
-            let parts = self
-                .arm
-                .colliders
-                .iter()
-                .map(|&c| (c, "arm"))
-                .chain([(self.gripper.palm_collider, "palm")])
-                .chain(
-                    self.gripper
-                        .finger_colliders
-                        .iter()
-                        .flatten()
-                        .map(|&c| (c, "finger")),
-                );
-            for (c, part) in parts {
-                for object in &self.objects {
-                    let force = self.contact_force(c, object.collider);
-                    if force > OBJECT_FORCE_LIMIT {
-                        tracing::debug!(
-                            part,
-                            tool0 = ?self.tool0_pose().translation,
-                            object = ?self.world.bodies[object.body].translation(),
-                            "pressed"
-                        );
-                        return Some(CollisionStop::Pressed {
-                            part,
-                            object: object.model.name.clone(),
-                            force,
-                        });
-                    }
-                }
-            }
-        }
-        None
     }
 }
 
