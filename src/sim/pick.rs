@@ -6,7 +6,7 @@
 use nalgebra::{Isometry3, Quaternion, Translation3, UnitQuaternion};
 use rapier3d::math::{Pose, Rotation, Vector};
 
-use super::guard::{CollisionStop, Guard, CREEP_GAP, CREEP_RATE, TOUCH_GAP};
+use super::guard::{CollisionStop, Guard, CREEP_GAP, CREEP_RATE};
 use super::{in_contact, ObjectLocation, Workcell, PHYSICS_HZ};
 use crate::grasp::gripper::GRIPPER;
 use crate::grasp::WorldGrasp;
@@ -43,6 +43,8 @@ const AFTER_ATTEMPT_SETTLE: f32 = 2.0;
 const RECOVER_TCP_HEIGHT: f32 = 0.25;
 /// See [`RECOVER_TCP_HEIGHT`] (m).
 const RECOVER_BACKOFF: f32 = 0.1;
+/// Distance within which a pad counts as touching an object (m).
+const TOUCH_GAP: f32 = 0.002;
 
 /// Why an attempt ended the way it did.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
