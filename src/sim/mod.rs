@@ -3,12 +3,14 @@
 //! Everything here uses rapier's own math types (glam, f32); the closed-form IK in
 //! `kinematics` works in nalgebra f64 and is converted at its call sites in `pick`.
 
+mod depth;
 mod guard;
 mod invariants;
 pub(crate) mod kinematics;
 pub mod pick;
 pub(crate) mod robot;
 mod shapes;
+mod stepping;
 
 use anyhow::Context;
 use rand::{Rng, SeedableRng};
@@ -20,8 +22,10 @@ use crate::assets::objects::ObjectModel;
 use crate::grasp::tote::{self, Tote, PICK_TOTE, PLACE_TOTE};
 use crate::vision::camera::Camera;
 use crate::vision::render::{Drawable, Shape};
+use depth::penetration;
 use robot::{groups, Arm, Gripper};
 use shapes::shared_shape;
+use stepping::configure_solver;
 
 /// Physics rate (Hz). 240 Hz kept thin fingers from tunnelling through small objects.
 pub(crate) const PHYSICS_HZ: f32 = 240.0;
@@ -39,13 +43,6 @@ pub(crate) const ENVIRONMENT_FRICTION: f32 = 1.0;
 
 /// Angular damping of objects (1/s).
 pub(crate) const OBJECT_ANGULAR_DAMPING: f32 = 1.0;
-/// Consecutive still steps (0.25 s) that count as settled.
-const SETTLED_STEPS: u32 = 60;
-/// An object moving slower than this (m/s) and turning slower than [`STILL_ANGULAR_SPEED`]
-/// is still.
-const STILL_LINEAR_SPEED: f32 = 0.005;
-/// See [`STILL_LINEAR_SPEED`] (rad/s).
-const STILL_ANGULAR_SPEED: f32 = 0.05;
 /// Longest wait for a dropped object to settle before the next falls (s).
 const MAX_SETTLE_SECONDS: f32 = 4.0;
 /// Drop positions (the reference's): x and y over bin 1's middle, height above the ground (m).
@@ -112,6 +109,8 @@ pub struct Workcell {
     violations: Option<Vec<String>>,
     /// What the workcell is doing, for the violations' messages.
     phase: &'static str,
+    /// Whether the arm was last told to stay where it is (see [`Workcell::step`]).
+    arm_held: bool,
 }
 
 /// Renders an extra view every few steps while the arm moves (for `--record`), on a thread of
@@ -151,6 +150,7 @@ impl Workcell {
             camera: Camera::top_down(),
             violations: None,
             phase: "idle",
+            arm_held: true,
         })
     }
 
@@ -206,26 +206,6 @@ impl Workcell {
                 r.renderer.join().unwrap_or_default()
             })
             .unwrap_or_default()
-    }
-
-    /// Advances physics by one step.
-    pub(crate) fn step(&mut self) {
-        self.world.step();
-        self.steps += 1;
-        if self.violations.is_some() {
-            self.check_invariants();
-        }
-        let due = self
-            .recorder
-            .as_ref()
-            .is_some_and(|r| self.steps.is_multiple_of(r.every));
-        if due {
-            let scene = self.drawables();
-            if let Some(r) = &self.recorder {
-                // The render thread only stops when the recording is taken.
-                let _ = r.scenes.send(scene);
-            }
-        }
     }
 
     /// Adds an object at `pose`, at rest.
@@ -288,43 +268,6 @@ impl Workcell {
         self.set_robot_collisions(true);
         self.enter("idle");
         Ok(())
-    }
-
-    /// Steps until every object is at rest (or `max_seconds` pass); returns the seconds simulated.
-    pub fn settle(&mut self, max_seconds: f32) -> f32 {
-        let max_steps = (max_seconds * PHYSICS_HZ) as u32;
-        let mut calm = 0;
-        let mut steps = 0;
-        while steps < max_steps {
-            self.hold_arm();
-            self.step();
-            steps += 1;
-            let moving = self.objects.iter().any(|o| {
-                let b = &self.world.bodies[o.body];
-                !b.is_sleeping()
-                    && (b.linvel().length() > STILL_LINEAR_SPEED
-                        || b.angvel().length() > STILL_ANGULAR_SPEED)
-            });
-            calm = if moving { 0 } else { calm + 1 };
-            // A rocking object is briefly still at each turn; a calm spell this long is rest.
-            if calm >= SETTLED_STEPS {
-                break;
-            }
-        }
-        steps as f32 / PHYSICS_HZ
-    }
-
-    /// Keeps the arm and palm where they are for the next step.
-    pub(crate) fn hold_arm(&mut self) {
-        let q = self.arm.joints;
-        self.drive_arm(q);
-    }
-
-    /// Schedules arm links and palm to reach `q` at the end of the next step.
-    pub(crate) fn drive_arm(&mut self, q: crate::sim::kinematics::Joints) {
-        self.arm.drive(&mut self.world, q);
-        let tool0 = self.arm.tool0_pose(&q);
-        self.gripper.drive(&mut self.world, tool0);
     }
 
     fn set_robot_collisions(&mut self, enabled: bool) {
@@ -429,33 +372,6 @@ impl Workcell {
     }
 }
 
-/// How deep two colliders overlap (m), at their poses now; 0 when apart, or when none of the
-/// narrow phase's contact points reads deeper than `screen` (m; −∞ takes any point).
-pub(crate) fn penetration(
-    world: &PhysicsWorld,
-    a: ColliderHandle,
-    b: ColliderHandle,
-    screen: f32,
-) -> f32 {
-    // The narrow phase's points come from before the step's solve and, with a compound against
-    // a thin box, can be tens of millimetres off (an 86 mm reading for a pear 11 mm into the
-    // floor), so they only screen, and the depth is measured afresh.
-    let near = world.contact_pair(a, b).is_some_and(|pair| {
-        pair.manifolds()
-            .iter()
-            .flat_map(|m| m.points.iter())
-            .any(|p| -p.dist > screen)
-    });
-    if !near {
-        return 0.0;
-    }
-    let (a, b) = (&world.colliders[a], &world.colliders[b]);
-    rapier3d::parry::query::contact(a.position(), a.shape(), b.position(), b.shape(), 0.0)
-        .ok()
-        .flatten()
-        .map_or(0.0, |contact| (-contact.dist).max(0.0))
-}
-
 /// Whether two colliders are in contact (within `gap` metres).
 pub(crate) fn in_contact(
     world: &PhysicsWorld,
@@ -481,23 +397,6 @@ pub fn oblique_camera() -> Camera {
         320,
         240,
     )
-}
-
-/// Solver settings the grasps depend on.
-fn configure_solver(world: &mut PhysicsWorld) {
-    world.gravity = Vector::new(0.0, 0.0, -9.8);
-    let p = &mut world.integration_parameters;
-    p.dt = 1.0 / PHYSICS_HZ;
-    p.friction_model = FrictionModel::Coulomb;
-    // The default recycling distance (5 cm) lets fingers pass through small objects.
-    p.normalized_contact_recycle_distance = 0.001;
-    p.contact_softness = SpringCoefficients::new(120.0, 10.0);
-    // Contacts with the fixed totes and ground. Rapier's default (60 Hz) is tuned for 60 Hz
-    // steps and is softer than the contacts above: a finger coming down on an object pushed it
-    // 5–50 mm into the floor before the protective stop, and objects under a load stayed 5 mm
-    // deep for seconds. At 480 Hz the floor wins that squeeze and the finger's contact gives.
-    p.static_contact_softness = SpringCoefficients::new(480.0, 10.0);
-    p.num_solver_iterations = 8;
 }
 
 /// The fixed scenery (ground, both totes, the pedestal): its drawables, and the environment's

@@ -43,6 +43,8 @@ const AFTER_ATTEMPT_SETTLE: f32 = 2.0;
 const RECOVER_TCP_HEIGHT: f32 = 0.25;
 /// See [`RECOVER_TCP_HEIGHT`] (m).
 const RECOVER_BACKOFF: f32 = 0.1;
+/// After a failure the hand first backs this far straight up, and only then opens (m).
+const RECOVER_RELIEF: f32 = 0.03;
 /// Distance within which a pad counts as touching an object (m).
 const TOUCH_GAP: f32 = 0.002;
 
@@ -310,12 +312,19 @@ impl Workcell {
         PickOutcome::failure(reason, detail)
     }
 
-    /// After a failed attempt: open, back straight up, and return home, without collision stops.
+    /// After a failed attempt: back a little straight up, open, back further up, and return home,
+    /// without collision stops.
     fn recover(&mut self) {
         self.enter("recover");
+        let ur5 = Ur5::new(to_isometry(&Pose::from_translation(super::ROBOT_BASE)));
+        // Relieve first, as a robot does after a protective stop: a pad left pressing on an
+        // object while the hand held still to open hammered it into the floor (thin scissors
+        // 5.3 mm deep, spinning at 10–20 rad/s between pad and floor).
+        let mut relieved = self.tool0_pose();
+        relieved.translation.z += RECOVER_RELIEF;
+        let _ = self.move_line_unchecked(&ur5, relieved);
         self.gripper.open(&mut self.world);
         self.wait_for_fingers(OPEN_WAIT);
-        let ur5 = Ur5::new(to_isometry(&Pose::from_translation(super::ROBOT_BASE)));
         let mut up = self.tool0_pose();
         up.translation.z = up
             .translation

@@ -1,0 +1,121 @@
+//! How the workcell advances time: the solver's settings, one step (split while an object falls
+//! fast), holding the arm, and settling.
+
+use rapier3d::prelude::*;
+
+use super::{Workcell, PHYSICS_HZ};
+use crate::sim::kinematics::Joints;
+
+/// Consecutive still steps (0.25 s) that count as settled.
+const SETTLED_STEPS: u32 = 60;
+/// An object moving slower than this (m/s) and turning slower than [`STILL_ANGULAR_SPEED`]
+/// is still.
+const STILL_LINEAR_SPEED: f32 = 0.005;
+/// See [`STILL_LINEAR_SPEED`] (rad/s).
+const STILL_ANGULAR_SPEED: f32 = 0.05;
+/// Parts a step is split into while the arm is held and an object moves faster than
+/// [`FAST_OBJECT_SPEED`]. An object dropped 0.2–0.7 m lands at 2–3.7 m/s, 8–15 mm per step, and
+/// a landing (or a drill landing on a thin clamp) left an object 5–10 mm inside the floor for a
+/// step or two: 15 times in the drops of the soak's 200 scenes. With quarter steps there were
+/// none; halves left 3, and quarters only above 0.5 m/s left 1 (BENCHMARKS.md, stop 14).
+const FAST_SUBSTEPS: u32 = 4;
+/// See [`FAST_SUBSTEPS`] (m/s).
+const FAST_OBJECT_SPEED: f32 = 0.3;
+
+/// Solver settings the grasps depend on.
+pub(super) fn configure_solver(world: &mut PhysicsWorld) {
+    world.gravity = Vector::new(0.0, 0.0, -9.8);
+    let p = &mut world.integration_parameters;
+    p.dt = 1.0 / PHYSICS_HZ;
+    p.friction_model = FrictionModel::Coulomb;
+    // The default recycling distance (5 cm) lets fingers pass through small objects.
+    p.normalized_contact_recycle_distance = 0.001;
+    p.contact_softness = SpringCoefficients::new(120.0, 10.0);
+    // Contacts with the fixed totes and ground. Rapier's default (60 Hz) is tuned for 60 Hz
+    // steps and is softer than the contacts above: a finger coming down on an object pushed it
+    // 5–50 mm into the floor before the protective stop, and objects under a load stayed 5 mm
+    // deep for seconds. At 480 Hz the floor wins that squeeze and the finger's contact gives.
+    p.static_contact_softness = SpringCoefficients::new(480.0, 10.0);
+    p.num_solver_iterations = 8;
+    // Rapier merges manifolds that share a normal into one cluster before solving them. Against
+    // the floor and walls, clusters let a dropped hammer land 5–7 mm into the empty floor, and
+    // held a mustard bottle resting by a wall between two of that wall's clusters with opposite
+    // normals, each pushing 12 N·s a step, until one let go and the bottle shot off at 1.7 m/s,
+    // 10.9 mm deep. Without clustering the soak found neither (BENCHMARKS.md, stop 14).
+    p.contact_clustering = false;
+}
+
+impl Workcell {
+    /// Advances physics by one step of `1 / PHYSICS_HZ`, in [`FAST_SUBSTEPS`] parts while the arm
+    /// is held and an object moves fast. The invariants, when watched, are checked after each part.
+    pub(crate) fn step(&mut self) {
+        // A moving arm's kinematic links reach their target at the end of the world's step, so a
+        // split step would move them the whole way in its first part: split only a held arm.
+        let fast = self.arm_held
+            && self
+                .objects
+                .iter()
+                .any(|o| self.world.bodies[o.body].linvel().length() > FAST_OBJECT_SPEED);
+        let parts = if fast { FAST_SUBSTEPS } else { 1 };
+        let dt = self.world.integration_parameters.dt;
+        self.world.integration_parameters.dt = dt / parts as f32;
+        for _ in 0..parts {
+            self.world.step();
+            if self.violations.is_some() {
+                self.check_invariants();
+            }
+        }
+        self.world.integration_parameters.dt = dt;
+        self.steps += 1;
+        let due = self
+            .recorder
+            .as_ref()
+            .is_some_and(|r| self.steps.is_multiple_of(r.every));
+        if due {
+            let scene = self.drawables();
+            if let Some(r) = &self.recorder {
+                // The render thread only stops when the recording is taken.
+                let _ = r.scenes.send(scene);
+            }
+        }
+    }
+
+    /// Steps until every object is at rest (or `max_seconds` pass); returns the seconds simulated.
+    pub fn settle(&mut self, max_seconds: f32) -> f32 {
+        let max_steps = (max_seconds * PHYSICS_HZ) as u32;
+        let mut calm = 0;
+        let mut steps = 0;
+        while steps < max_steps {
+            self.hold_arm();
+            self.step();
+            steps += 1;
+            let moving = self.objects.iter().any(|o| {
+                let b = &self.world.bodies[o.body];
+                !b.is_sleeping()
+                    && (b.linvel().length() > STILL_LINEAR_SPEED
+                        || b.angvel().length() > STILL_ANGULAR_SPEED)
+            });
+            calm = if moving { 0 } else { calm + 1 };
+            // A rocking object is briefly still at each turn; a calm spell this long is rest.
+            if calm >= SETTLED_STEPS {
+                break;
+            }
+        }
+        steps as f32 / PHYSICS_HZ
+    }
+
+    /// Keeps the arm and palm where they are for the next step.
+    pub(crate) fn hold_arm(&mut self) {
+        let q = self.arm.joints;
+        self.drive_arm(q);
+        self.arm_held = true;
+    }
+
+    /// Schedules arm links and palm to reach `q` at the end of the next step.
+    pub(crate) fn drive_arm(&mut self, q: Joints) {
+        self.arm_held = false;
+        self.arm.drive(&mut self.world, q);
+        let tool0 = self.arm.tool0_pose(&q);
+        self.gripper.drive(&mut self.world, tool0);
+    }
+}
