@@ -78,3 +78,45 @@ fn box_axes_depth(a: &Collider, pose: &Pose, part: &dyn Shape) -> Option<f32> {
     let push = (high + half).min(half - low).max(Vector::ZERO);
     Some(push.min_element())
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rapier3d::math::Rotation;
+    use rapier3d::parry::shape::{Ball, Cuboid};
+
+    #[test]
+    fn the_box_axes_bound_reads_a_cube_s_depth_in_a_floor() {
+        let floor = ColliderBuilder::cuboid(1.0, 1.0, 0.1).build();
+        let cube = Cuboid::new(Vector::splat(0.05));
+        let at = |z: f32, tilt: f32| {
+            Pose::from_parts(Vector::new(0.2, -0.3, z), Rotation::from_rotation_x(tilt))
+        };
+        let diagonal = 0.05 * std::f32::consts::SQRT_2;
+        for (pose, expected) in [
+            (at(0.15 - 0.003, 0.0), 0.003),
+            // On an edge, 45° over: the edge is what goes in.
+            (
+                at(0.1 + diagonal - 0.004, std::f32::consts::FRAC_PI_4),
+                0.004,
+            ),
+            (at(0.15 + 0.01, 0.0), 0.0),
+        ] {
+            let bound = box_axes_depth(&floor, &pose, &cube).unwrap();
+            assert!(
+                (bound - expected).abs() < 1e-5,
+                "{bound} against {expected}"
+            );
+            let exact =
+                rapier3d::parry::query::contact(floor.position(), floor.shape(), &pose, &cube, 0.0)
+                    .unwrap()
+                    .map_or(0.0, |c| (-c.dist).max(0.0));
+            assert!(
+                (exact - expected).abs() < 1e-4,
+                "exact {exact} against {expected}"
+            );
+        }
+        // A part without vertices has no bound; the exact query alone measures it.
+        assert!(box_axes_depth(&floor, &at(0.1, 0.0), &Ball::new(0.05)).is_none());
+    }
+}

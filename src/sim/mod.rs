@@ -111,6 +111,8 @@ pub struct Workcell {
     phase: &'static str,
     /// Whether the arm was last told to stay where it is (see [`Workcell::step`]).
     arm_held: bool,
+    /// Parts a step is split into while an object moves fast (see [`Workcell::step`]).
+    fast_substeps: u32,
 }
 
 /// Renders an extra view every few steps while the arm moves (for `--record`), on a thread of
@@ -151,6 +153,7 @@ impl Workcell {
             violations: None,
             phase: "idle",
             arm_held: true,
+            fast_substeps: stepping::FAST_SUBSTEPS,
         })
     }
 
