@@ -43,12 +43,6 @@ pub(crate) const ENVIRONMENT_FRICTION: f32 = 1.0;
 
 /// Angular damping of objects (1/s).
 pub(crate) const OBJECT_ANGULAR_DAMPING: f32 = 1.0;
-/// The solver keeps objects this far off what they rest on (m). Touching exactly, a flat face of
-/// a convex part on a box sends the narrow phase's penetration step astray now and then: a
-/// contact on the floor with a slanted normal and 34 mm of depth kicked the resting scissors
-/// 9 mm into it in one step. A hair's gap keeps the contacts in the separated case, which the
-/// narrow phase computes reliably.
-const OBJECT_CONTACT_SKIN: f32 = 0.0005;
 /// Longest wait for a dropped object to settle before the next falls (s).
 const MAX_SETTLE_SECONDS: f32 = 4.0;
 /// Drop positions (the reference's): x and y over bin 1's middle, height above the ground (m).
@@ -239,7 +233,6 @@ impl Workcell {
                 .friction(model.friction)
                 .friction_combine_rule(CoefficientCombineRule::Multiply)
                 .restitution(0.0)
-                .contact_skin(OBJECT_CONTACT_SKIN)
                 .collision_groups(groups::object()),
             Some(body),
         );
