@@ -1,5 +1,6 @@
 //! How deep a body is inside one of the scenery's fixed boxes: parry's exact query, part by part,
-//! bounded by the depth along the box's own axes.
+//! bounded by the depth along the box's own axes; and the hook that drops the narrow phase's
+//! contacts that claim more depth than that bound allows.
 
 use rapier3d::math::{Pose, Vector};
 use rapier3d::parry::shape::Shape;
@@ -49,6 +50,82 @@ pub(crate) fn penetration(
             .fold(0.0, f32::max),
         None => depth(b.position(), b.shape()),
     }
+}
+
+/// Solver contacts with a fixed box no deeper than this (m) are never second-guessed, so the
+/// bound below is only computed for the rare deep ones.
+const MISFIRE_SCREEN: f32 = 0.002;
+/// How far past the box-axes bound a contact's depth may read before it counts as a misfire (m).
+/// The bound is never less than the true depth; the margin absorbs the clipped points of a
+/// manifold whose normal is a little off the box's face.
+const MISFIRE_MARGIN: f32 = 0.002;
+
+/// Drops, for one step, a manifold between a fixed box and a body part whose solver contacts read
+/// deeper than any push along the box's axes needs to separate them. Parry's penetration step
+/// misfires now and then on a flat face resting on a box: it gave a convex part of the scissors,
+/// lying at rest in bin 2, a floor contact with a slanted normal at 33.7 mm depth, and the solver
+/// tipped them 9 mm into the floor in one step (BENCHMARKS.md, stops 14 and 15). The part's other
+/// contacts, and the next step's fresh ones, carry it as before.
+pub(super) struct DropMisfiredContacts;
+
+impl PhysicsHooks for DropMisfiredContacts {
+    fn modify_solver_contacts(&self, context: &mut ContactModificationContext) {
+        let ModifiableContacts::Rigid(contacts) = &mut context.contacts else {
+            return;
+        };
+        let deepest = contacts
+            .solver_contacts
+            .iter()
+            .map(|c| -c.dist)
+            .fold(0.0, f32::max);
+        if deepest <= MISFIRE_SCREEN {
+            return;
+        }
+        let (c1, c2) = (
+            &context.colliders[context.collider1],
+            &context.colliders[context.collider2],
+        );
+        // Only a dynamic body is pushed by the solver; the kinematic arm's contacts are read by
+        // the guards from the manifold points, which this leaves alone.
+        let dynamic = |c: &Collider| {
+            c.parent()
+                .is_some_and(|p| context.bodies[p].body_type() == RigidBodyType::Dynamic)
+        };
+        let (m1, m2) = (contacts.manifold.subshape1, contacts.manifold.subshape2);
+        let misfired = if is_fixed_box(c1) && dynamic(c2) {
+            exceeds_box_axes_depth(c1, c2, m2, deepest)
+        } else if is_fixed_box(c2) && dynamic(c1) {
+            exceeds_box_axes_depth(c2, c1, m1, deepest)
+        } else {
+            false
+        };
+        if misfired {
+            tracing::debug!(
+                depth_mm = deepest * 1e3,
+                normal = ?contacts.normal,
+                "dropped a misfired contact with a fixed box"
+            );
+            contacts.solver_contacts.clear();
+        }
+    }
+}
+
+fn is_fixed_box(collider: &Collider) -> bool {
+    collider.parent().is_none() && collider.shape().as_cuboid().is_some()
+}
+
+/// True when `depth` (m), read by the narrow phase between the fixed box `fixed` and part
+/// `subshape` of `other` (the whole shape when it is not a compound), is deeper than the
+/// box-axes bound allows.
+fn exceeds_box_axes_depth(fixed: &Collider, other: &Collider, subshape: u32, depth: f32) -> bool {
+    let (pose, part) = match other.shape().as_compound() {
+        Some(compound) => match compound.shapes().get(subshape as usize) {
+            Some((part_pose, part)) => (*other.position() * *part_pose, part.as_ref()),
+            None => return false,
+        },
+        None => (*other.position(), other.shape()),
+    };
+    box_axes_depth(fixed, &pose, part).is_some_and(|bound| depth > bound + MISFIRE_MARGIN)
 }
 
 /// The least push along one of box `a`'s axes that takes `part` (at `pose`) out of it (m), or
@@ -118,5 +195,36 @@ mod tests {
         }
         // A part without vertices has no bound; the exact query alone measures it.
         assert!(box_axes_depth(&floor, &at(0.1, 0.0), &Ball::new(0.05)).is_none());
+    }
+
+    #[test]
+    fn a_contact_deeper_than_the_box_axes_allow_is_a_misfire() {
+        let floor = ColliderBuilder::cuboid(1.0, 1.0, 0.1).build();
+        // A compound of two cubes side by side, resting 3 mm into the floor (top at z 0.1).
+        let cube = |x: f32| {
+            (
+                Pose::from_translation(Vector::new(x, 0.0, 0.0)),
+                SharedShape::cuboid(0.02, 0.02, 0.02),
+            )
+        };
+        let body = ColliderBuilder::compound(vec![cube(-0.03), cube(0.03)])
+            .translation(Vector::new(0.0, 0.0, 0.1 + 0.02 - 0.003))
+            .build();
+        // The scissors' misfire: 33.7 mm against a part lying 3 mm deep.
+        assert!(exceeds_box_axes_depth(&floor, &body, 1, 0.0337));
+        // The true depth, and a clipped point a little past it, stand.
+        assert!(!exceeds_box_axes_depth(&floor, &body, 0, 0.003));
+        assert!(!exceeds_box_axes_depth(&floor, &body, 1, 0.0045));
+        // Sunk for real, 12 mm deep, a 12 mm contact stands too.
+        let sunk = ColliderBuilder::cuboid(0.02, 0.02, 0.02)
+            .translation(Vector::new(0.0, 0.0, 0.1 + 0.02 - 0.012))
+            .build();
+        assert!(!exceeds_box_axes_depth(&floor, &sunk, 0, 0.012));
+        assert!(exceeds_box_axes_depth(&floor, &sunk, 0, 0.03));
+        // A part index the compound lacks is left alone rather than guessed at.
+        assert!(!exceeds_box_axes_depth(&floor, &body, 7, 0.05));
+        // Only a box without a body is the fixed scenery.
+        assert!(is_fixed_box(&floor));
+        assert!(!is_fixed_box(&body));
     }
 }

@@ -419,7 +419,10 @@ fn build_scenery(world: &mut PhysicsWorld) -> (Vec<Drawable>, Vec<ColliderHandle
                 .translation(center)
                 .friction(ENVIRONMENT_FRICTION)
                 .friction_combine_rule(CoefficientCombineRule::Multiply)
-                .collision_groups(groups::environment()),
+                .collision_groups(groups::environment())
+                // Its contacts are screened for the narrow phase's misfires (depth.rs); a
+                // hooked pair is never recycled, so its contacts are fresh every step.
+                .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
             None,
         );
         environment.push(handle);

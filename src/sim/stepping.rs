@@ -3,6 +3,7 @@
 
 use rapier3d::prelude::*;
 
+use super::depth::DropMisfiredContacts;
 use super::{Workcell, PHYSICS_HZ};
 use crate::sim::kinematics::Joints;
 
@@ -60,7 +61,7 @@ impl Workcell {
         let dt = self.world.integration_parameters.dt;
         self.world.integration_parameters.dt = dt / parts as f32;
         for _ in 0..parts {
-            self.world.step();
+            self.world.step_with_events(&DropMisfiredContacts, &());
             if self.violations.is_some() {
                 self.check_invariants();
             }
@@ -139,15 +140,15 @@ mod tests {
 
     #[test]
     fn quarter_steps_keep_a_fast_landing_out_of_the_floor() {
-        // Seed 18 is the one of seeds 0–59 whose drops, in whole steps, land an object more than
-        // 5 mm into the floor (the foam brick, 5.3 mm at 0.78 m/s). If a physics change moves
-        // that, search the seeds again for one that breaks the limit in whole steps.
-        let whole = drop_violations(18, 1);
+        // Of seeds 0–270, the drops of 5, 125, 156, 267 and 268 land an object more than 5 mm into
+        // the floor in whole steps; 267 by the widest margin (the hammer, 7.1 mm). If a physics
+        // change moves that, search the seeds again for one that breaks the limit in whole steps.
+        let whole = drop_violations(267, 1);
         assert!(
             !whole.is_empty(),
-            "whole steps no longer break the limit on seed 18; pick another seed"
+            "whole steps no longer break the limit on seed 267; pick another seed"
         );
-        let split = drop_violations(18, FAST_SUBSTEPS);
+        let split = drop_violations(267, FAST_SUBSTEPS);
         assert!(split.is_empty(), "quarter steps: {split:?}");
     }
 }
