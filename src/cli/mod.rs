@@ -212,6 +212,11 @@ pub(crate) struct EvalArgs {
     /// across the object, not on an edge; the argmax when none passes (0 = plain argmax).
     #[arg(long, value_name = "N", default_value_t = 200)]
     pub(crate) verify_top: usize,
+    /// Model policy: the depth test may replace the argmax only with a candidate scoring at
+    /// least this fraction of it (0 = any of the N best). 0.25 picks more objects alone in the
+    /// bin and moves slightly fewer in clutter (BENCHMARKS.md, "Stop 16").
+    #[arg(long, value_name = "F", default_value_t = 0.0, value_parser = fraction)]
+    pub(crate) verify_floor: f32,
     /// Model policy: move the chosen grasp to the middle of the surface under it, turning it to
     /// an angle that fits there if needed (needs `--collision-check full`). Off by default: it
     /// moves more objects in empty_bin but picks fewer training objects (BENCHMARKS.md).
@@ -391,6 +396,13 @@ fn parse_label_address(text: &str) -> Result<(String, usize), String> {
         return Err(fail());
     }
     Ok((object.to_owned(), k))
+}
+
+fn fraction(text: &str) -> Result<f32, String> {
+    match text.parse::<f32>() {
+        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
+        _ => Err(format!("'{text}' must be a fraction from 0 to 1")),
+    }
 }
 
 fn non_negative(text: &str) -> Result<f32, String> {

@@ -64,6 +64,7 @@ impl EvalArgs {
         let model = ModelPolicyConfig {
             check: self.collision_check,
             verify_top: self.verify_top,
+            verify_floor: self.verify_floor,
             centring: self.centring,
         };
         model.validate()?;

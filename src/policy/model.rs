@@ -3,13 +3,14 @@
 
 use std::time::Instant;
 
-use super::affordance::{visualisation, Suppression};
+use super::affordance::{visualisation, Choice, Suppression};
 use super::collision::{allowed_actions, CollisionCheck, GraspSite, GripperVolume, HeightMap};
 use super::oracle::{DepthCheck, OracleConfig};
 use super::{Decision, Observation, Policy};
 use crate::data::input::{rotated_inputs, InputKind, NetInput};
 use crate::grasp::gripper::GRIPPER;
 use crate::grasp::tote::PICK_TOTE;
+use crate::grasp::PixelGrasp;
 use crate::model::inference::AffordanceModel;
 
 /// How the model policy checks the network's candidates (docs/evaluation.md).
@@ -20,6 +21,9 @@ pub(crate) struct ModelPolicyConfig {
     /// How many of the best actions the depth test may look at; 0 executes the argmax as it
     /// is. Default 200.
     pub(crate) verify_top: usize,
+    /// The depth test replaces the argmax only with a candidate scoring at least this fraction
+    /// of it; 0 (the default) lets any candidate in the N best replace it.
+    pub(crate) verify_floor: f32,
     /// Move the chosen grasp to the middle of its surface (needs `check` `Full`). Default off.
     pub(crate) centring: bool,
 }
@@ -29,6 +33,7 @@ impl Default for ModelPolicyConfig {
         Self {
             check: CollisionCheck::Full,
             verify_top: 200,
+            verify_floor: 0.0,
             centring: false,
         }
     }
@@ -43,6 +48,12 @@ pub(crate) enum ConfigError {
         /// The check asked for.
         check: CollisionCheck,
     },
+    /// The floor only narrows the depth test's candidates, so it needs the test on.
+    #[error("--verify-floor {floor} narrows the depth test, which --verify-top 0 turns off; give --verify-top N with N > 0, or drop --verify-floor")]
+    FloorWithoutDepthTest {
+        /// The floor asked for.
+        floor: f32,
+    },
 }
 
 impl ModelPolicyConfig {
@@ -50,6 +61,11 @@ impl ModelPolicyConfig {
     pub(crate) fn validate(&self) -> Result<(), ConfigError> {
         if self.centring && self.check != CollisionCheck::Full {
             return Err(ConfigError::CentringNeedsFullCheck { check: self.check });
+        }
+        if self.verify_floor > 0.0 && self.verify_top == 0 {
+            return Err(ConfigError::FloorWithoutDepthTest {
+                floor: self.verify_floor,
+            });
         }
         Ok(())
     }
@@ -77,6 +93,7 @@ impl Policy for ModelPolicy {
         let ModelPolicyConfig {
             check,
             verify_top,
+            verify_floor,
             centring,
         } = self.config;
         let (camera, frame) = (view.camera, view.frame);
@@ -104,11 +121,9 @@ impl Policy for ModelPolicy {
             // side wider than the jaw leaves room for. When none of the best passes, the
             // argmax is still tried (BENCHMARKS.md, "Depth test").
             let test = DepthCheck::new(camera, frame, OracleConfig::default());
-            if let Some(passed) = maps
-                .ranked(verify_top)
-                .into_iter()
-                .find(|c| test.assess(c.grasp).is_ok())
-            {
+            if let Some(passed) = first_verified(maps.ranked(verify_top), verify_floor, |g| {
+                test.assess(g).is_ok()
+            }) {
                 choice = passed;
             }
         }
@@ -135,5 +150,78 @@ impl Policy for ModelPolicy {
             vis: Some(visualisation(&rotated, &maps, &choice)),
             network_seconds,
         }
+    }
+}
+
+/// The first of `ranked` (best first) that `passes`, among those scoring at least `floor` times
+/// the best. Alone in the bin, an object the test finds too wide for the jaw (a 75 mm can,
+/// with the test's 6 mm to spare on each side) leaves only its edges to pass, where the network
+/// scores a few per cent of its peak and the pads close on air; the floor keeps the peak instead
+/// (BENCHMARKS.md, "Stop 16").
+fn first_verified(
+    ranked: Vec<Choice>,
+    floor: f32,
+    passes: impl Fn(PixelGrasp) -> bool,
+) -> Option<Choice> {
+    let least = ranked.first()?.score * floor;
+    ranked
+        .into_iter()
+        .take_while(|c| c.score >= least)
+        .find(|c| passes(c.grasp))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn candidate(u: u32, score: f32) -> Choice {
+        let grasp = PixelGrasp {
+            u,
+            v: 64,
+            angle_deg: 0.0,
+        };
+        Choice {
+            bin: 0,
+            rotated: [u, 64],
+            grasp,
+            score,
+        }
+    }
+
+    #[test]
+    fn the_floor_keeps_candidates_the_network_barely_scores_from_replacing_the_peak() {
+        let ranked = vec![candidate(10, 0.4), candidate(20, 0.3), candidate(30, 0.02)];
+        let only_far_edge = |g: PixelGrasp| g.u == 30;
+        // Without a floor any passing candidate replaces the peak, however low its score.
+        let chosen = first_verified(ranked.clone(), 0.0, only_far_edge).unwrap();
+        assert_eq!(chosen.grasp.u, 30);
+        // With one, a candidate under a quarter of the peak does not: the argmax stands.
+        assert!(first_verified(ranked.clone(), 0.25, only_far_edge).is_none());
+        // The floor narrows the list but keeps its order: the best passing one above it wins.
+        let both = |g: PixelGrasp| g.u != 10;
+        assert_eq!(
+            first_verified(ranked.clone(), 0.25, both).unwrap().grasp.u,
+            20
+        );
+        assert_eq!(first_verified(ranked, 1.0, both), None);
+        assert_eq!(first_verified(Vec::new(), 0.25, |_| true), None);
+    }
+
+    #[test]
+    fn a_floor_without_the_depth_test_is_refused() {
+        let config = ModelPolicyConfig {
+            verify_top: 0,
+            verify_floor: 0.25,
+            ..ModelPolicyConfig::default()
+        };
+        assert_eq!(
+            config.validate(),
+            Err(ConfigError::FloorWithoutDepthTest { floor: 0.25 })
+        );
+        let on = ModelPolicyConfig {
+            verify_floor: 0.25,
+            ..ModelPolicyConfig::default()
+        };
+        assert_eq!(on.validate(), Ok(()));
     }
 }

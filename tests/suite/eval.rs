@@ -134,6 +134,7 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
     assert_eq!(decisions(&report), decisions(&read_json(&again)));
     assert_eq!(report["config"]["centring"], false);
     assert_eq!(report["config"]["verify_top"], 200);
+    assert_eq!(report["config"]["verify_floor"], 0.0);
 
     // Centring reports the executed grasp as its own action: angle, bin and map pixel agree.
     let centred = setup.path("centred.json");
@@ -267,6 +268,19 @@ fn bad_inputs_are_one_line_errors_with_exit_status_2() {
         "walls",
     ]);
     assert_user_error(&out, &["--centring", "--collision-check full", "walls"]);
+    let out = setup.run(&["eval", "--task", "test", "--verify-floor", "1.5"]);
+    assert_user_error(&out, &["1.5", "fraction from 0 to 1"]);
+    let floor_alone = [
+        "eval",
+        "--task",
+        "test",
+        "--verify-top",
+        "0",
+        "--verify-floor",
+        "0.25",
+    ];
+    let out = setup.run(&floor_alone);
+    assert_user_error(&out, &["--verify-floor 0.25", "--verify-top 0"]);
     let out = setup.run(&["eval", "--task", "test", "--resume"]);
     assert_user_error(&out, &["--resume", "--json"]);
     let corrupt = setup.path("corrupt.safetensors");
