@@ -118,8 +118,8 @@ impl Policy for ModelPolicy {
         if verify_top > 0 {
             // The network ranks, the planner's depth test vetoes: in clutter its peak often
             // sits on a box's edge or corner, where the pads squeeze the box out, or across a
-            // side wider than the jaw leaves room for. When none of the best passes, the
-            // argmax is still tried (BENCHMARKS.md, "Depth test").
+            // side wider than the jaw leaves room for. When none of the best passes (or none
+            // above the floor), the argmax is still tried (BENCHMARKS.md, "Depth test").
             let test = DepthCheck::new(camera, frame, OracleConfig::default());
             if let Some(passed) = first_verified(maps.ranked(verify_top), verify_floor, |g| {
                 test.assess(g).is_ok()
