@@ -399,10 +399,10 @@ fn parse_label_address(text: &str) -> Result<(String, usize), String> {
 }
 
 fn fraction(text: &str) -> Result<f32, String> {
-    match text.parse::<f32>() {
-        Ok(v) if (0.0..=1.0).contains(&v) => Ok(v),
-        _ => Err(format!("'{text}' must be a fraction from 0 to 1")),
-    }
+    non_negative(text)
+        .ok()
+        .filter(|&v| v <= 1.0)
+        .ok_or_else(|| format!("'{text}' must be a fraction from 0 to 1"))
 }
 
 fn non_negative(text: &str) -> Result<f32, String> {
