@@ -184,7 +184,8 @@ pub(crate) struct EvalArgs {
     /// Several base seeds, aggregated: a list and/or ranges, e.g. 1-10 or 0,1000,2000.
     #[arg(long, value_name = "LIST", value_parser = parse_seed_list)]
     pub(crate) seeds: Option<SeedList>,
-    /// Failure suppression: lower the affordance around the last N failed actions (0 = off).
+    /// Failure suppression: lower the affordance around the last N failed actions (0 = off);
+    /// the oracle instead tries first the objects fewer of them landed on.
     #[arg(
         long = "n_past_action",
         visible_alias = "n-past-action",

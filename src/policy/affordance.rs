@@ -184,11 +184,12 @@ impl Default for SuppressionConfig {
     }
 }
 
-/// The last N actions and the map lowering they cause.
+/// The last N executed grasps and the map lowering they cause. Any policy's grasps are kept, so
+/// that the oracle can read them too (it orders objects by them instead of lowering maps).
 #[derive(Debug, Clone)]
 pub(crate) struct Suppression {
     config: SuppressionConfig,
-    past: VecDeque<Choice>,
+    past: VecDeque<PixelGrasp>,
 }
 
 impl Suppression {
@@ -200,20 +201,19 @@ impl Suppression {
         }
     }
 
-    /// Remembers an executed action (a no-op for successes unless configured, and when off).
-    pub(crate) fn record(&mut self, choice: Choice, success: bool) {
+    /// Remembers an executed grasp (a no-op for successes unless configured, and when off).
+    pub(crate) fn record(&mut self, grasp: PixelGrasp, success: bool) {
         if self.config.remember == 0 || (success && !self.config.remember_successes) {
             return;
         }
         if self.past.len() == self.config.remember {
             self.past.pop_front();
         }
-        self.past.push_back(choice);
+        self.past.push_back(grasp);
     }
 
-    /// The remembered actions, oldest first.
-    #[cfg(test)]
-    pub(crate) fn past(&self) -> impl Iterator<Item = &Choice> {
+    /// The remembered grasps, oldest first.
+    pub(crate) fn past(&self) -> impl Iterator<Item = &PixelGrasp> {
         self.past.iter()
     }
 
@@ -225,9 +225,10 @@ impl Suppression {
         let two_var = 2.0 * self.config.sigma_px * self.config.sigma_px;
         let reach = (3.0 * self.config.sigma_px).ceil() as i64;
         for past in &self.past {
-            let centre = [past.grasp.u as f32 + 0.5, past.grasp.v as f32 + 0.5];
+            let centre = [past.u as f32 + 0.5, past.v as f32 + 0.5];
+            let past_bin = angle_bin(past.angle_deg);
             for bin in 0..BINS {
-                let apart = (bin + BINS - past.bin) % BINS;
+                let apart = (bin + BINS - past_bin) % BINS;
                 if apart.min(BINS - apart) > self.config.rotation_reach {
                     continue;
                 }
@@ -454,7 +455,7 @@ mod tests {
                         "rotation_reach {rotation_reach}: chose {choice:?} twice in a row"
                     );
                 }
-                memory.record(choice, false);
+                memory.record(choice.grasp, false);
                 previous = Some(choice);
             }
         }
@@ -470,18 +471,18 @@ mod tests {
         });
         let first = raw.choose();
         assert_eq!((first.grasp.u, first.grasp.v), (40, 60));
-        memory.record(first, false);
+        memory.record(first.grasp, false);
         let mut maps = raw.clone();
         memory.apply(&mut maps);
         let second = maps.choose();
         assert_eq!((second.grasp.u, second.grasp.v), (80, 70));
-        memory.record(second, false);
+        memory.record(second.grasp, false);
         let mut maps = raw.clone();
         memory.apply(&mut maps);
         assert_eq!((maps.choose().grasp.u, maps.choose().grasp.v), (64, 30));
         assert!(maps.values.iter().all(|v| (0.0..=1.0).contains(v)));
         // A third failure pushes the first out of the two-action memory.
-        memory.record(maps.choose(), false);
+        memory.record(maps.choose().grasp, false);
         let mut maps = raw.clone();
         memory.apply(&mut maps);
         assert_eq!((maps.choose().grasp.u, maps.choose().grasp.v), (40, 60));
@@ -516,20 +517,20 @@ mod tests {
     fn successes_are_forgotten_unless_configured_and_zero_means_off() {
         let choice = bumpy_maps().choose();
         let mut off = Suppression::new(SuppressionConfig::default());
-        off.record(choice, false);
+        off.record(choice.grasp, false);
         assert_eq!(off.past().count(), 0);
         let mut failures = Suppression::new(SuppressionConfig {
             remember: 4,
             ..SuppressionConfig::default()
         });
-        failures.record(choice, true);
+        failures.record(choice.grasp, true);
         assert_eq!(failures.past().count(), 0);
         let mut all = Suppression::new(SuppressionConfig {
             remember: 4,
             remember_successes: true,
             ..SuppressionConfig::default()
         });
-        all.record(choice, true);
+        all.record(choice.grasp, true);
         assert_eq!(all.past().count(), 1);
     }
 
@@ -544,7 +545,7 @@ mod tests {
                 rotation_reach: reach,
                 ..SuppressionConfig::default()
             });
-            memory.record(first, false);
+            memory.record(first.grasp, false);
             let mut maps = raw.clone();
             memory.apply(&mut maps);
             for bin in 0..BINS {

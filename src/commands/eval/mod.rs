@@ -420,8 +420,8 @@ impl Evaluation<'_> {
             let attempt_start = Instant::now();
             let vis = self.vis_path(seed, &format!("seed{seed}_attempt{a:02}.png"));
             let mut record = self.attempt(&mut cell, &memory, seed, a, vis)?;
-            if let Some(choice) = record.choice {
-                memory.record(choice, record.success);
+            if let Some(grasp) = record.grasp {
+                memory.record(grasp, record.success);
             }
             let moved = count(&cell, ObjectLocation::Bin2);
             record.moved = Some(moved);
