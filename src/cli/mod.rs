@@ -218,6 +218,11 @@ pub(crate) struct EvalArgs {
     /// bin and moves slightly fewer in clutter (BENCHMARKS.md, "Stop 16").
     #[arg(long, value_name = "F", default_value_t = 0.0, value_parser = fraction)]
     pub(crate) verify_floor: f32,
+    /// Model policy: when none of the N best allowed actions passes the depth test, test the
+    /// best M of the network's actions before the collision check, and execute the first that
+    /// passes (0 = off; default: the same N as --verify-top).
+    #[arg(long, value_name = "M")]
+    pub(crate) verify_rejected: Option<usize>,
     /// Model policy: move the chosen grasp to the middle of the surface under it, turning it to
     /// an angle that fits there if needed (needs `--collision-check full`). Off by default: it
     /// moves more objects in empty_bin but picks fewer training objects (BENCHMARKS.md).

@@ -65,6 +65,7 @@ impl EvalArgs {
             check: self.collision_check,
             verify_top: self.verify_top,
             verify_floor: self.verify_floor,
+            verify_rejected: self.verify_rejected.unwrap_or(self.verify_top),
             centring: self.centring,
         };
         model.validate()?;

@@ -135,6 +135,7 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
     assert_eq!(report["config"]["centring"], false);
     assert_eq!(report["config"]["verify_top"], 200);
     assert_eq!(report["config"]["verify_floor"], 0.0);
+    assert_eq!(report["config"]["verify_rejected"], 200);
 
     // Centring reports the executed grasp as its own action: angle, bin and map pixel agree.
     let centred = setup.path("centred.json");
@@ -281,6 +282,17 @@ fn bad_inputs_are_one_line_errors_with_exit_status_2() {
     ];
     let out = setup.run(&floor_alone);
     assert_user_error(&out, &["--verify-floor 0.25", "--verify-top 0"]);
+    let second_pass_alone = [
+        "eval",
+        "--task",
+        "test",
+        "--verify-top",
+        "0",
+        "--verify-rejected",
+        "50",
+    ];
+    let out = setup.run(&second_pass_alone);
+    assert_user_error(&out, &["--verify-rejected 50", "--verify-top 0"]);
     let out = setup.run(&["eval", "--task", "test", "--resume"]);
     assert_user_error(&out, &["--resume", "--json"]);
     let corrupt = setup.path("corrupt.safetensors");

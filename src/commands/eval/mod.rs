@@ -349,6 +349,7 @@ fn resolved_config(context: &Context, config: &EvalConfig, names: &[String]) -> 
         "collision_check": model.then_some(config.model.check),
         "verify_top": model.then_some(config.model.verify_top),
         "verify_floor": model.then_some(config.model.verify_floor),
+        "verify_rejected": model.then_some(config.model.verify_rejected),
         "centring": model && config.model.centring,
         "max_attempts": config.max_attempts,
         "attempts_per_object": ATTEMPTS_PER_OBJECT,
