@@ -240,6 +240,7 @@ mod tests {
         let config = ModelPolicyConfig {
             verify_top: 0,
             verify_floor: 0.25,
+            verify_rejected: 0,
             ..ModelPolicyConfig::default()
         };
         assert_eq!(
