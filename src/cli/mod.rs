@@ -215,7 +215,7 @@ pub(crate) struct EvalArgs {
     pub(crate) verify_top: usize,
     /// Model policy: the depth test may replace the argmax only with a candidate scoring at
     /// least this fraction of it (0 = any of the N best). 0.25 picks more objects alone in the
-    /// bin and moves slightly fewer in clutter (BENCHMARKS.md, "Stop 16").
+    /// bin and about as many in clutter (BENCHMARKS.md, "Stop 17").
     #[arg(long, value_name = "F", default_value_t = 0.0, value_parser = fraction)]
     pub(crate) verify_floor: f32,
     /// Model policy: when none of the N best allowed actions passes the depth test, test the
