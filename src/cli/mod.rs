@@ -210,7 +210,8 @@ pub(crate) struct EvalArgs {
     /// Model policy: execute the first of the N best actions (after suppression and the
     /// collision check) that passes the planner's depth test: the object fits the open jaw with
     /// room to spare, both pads come down in free space and seen, and they close on flat faces
-    /// across the object, not on an edge; the argmax when none passes (0 = plain argmax).
+    /// across the object, not on an edge; when none passes, the second pass (--verify-rejected),
+    /// then the argmax (0 = plain argmax).
     #[arg(long, value_name = "N", default_value_t = 200)]
     pub(crate) verify_top: usize,
     /// Model policy: the depth test may replace the argmax only with a candidate scoring at
