@@ -126,14 +126,13 @@ impl Policy for ModelPolicy {
             .expect("the policy builds the input its model was trained on");
         let rotated: Vec<_> = rotated_input.into_iter().map(|r| r.rgb).collect();
         let gripper = GripperVolume::from(&GRIPPER);
+        // Suppression only lowers and clips to [0, 1], so it gives the same maps before the
+        // collision check's zeroing as after; applied first, the second pass's copy shares it.
+        memory.apply(&mut maps);
         let second_pass = verify_top > 0 && verify_rejected > 0 && check != CollisionCheck::Off;
-        let mut unchecked = second_pass.then(|| maps.clone());
+        let unchecked = second_pass.then(|| maps.clone());
         if check != CollisionCheck::Off {
             maps.restrict(&allowed_actions(camera, frame, &PICK_TOTE, &gripper, check));
-        }
-        memory.apply(&mut maps);
-        if let Some(unchecked) = &mut unchecked {
-            memory.apply(unchecked);
         }
         let mut choice = maps.choose();
         if verify_top > 0 {
@@ -237,35 +236,24 @@ mod tests {
 
     #[test]
     fn a_floor_or_a_second_pass_without_the_depth_test_is_refused() {
-        let config = ModelPolicyConfig {
-            verify_top: 0,
-            verify_floor: 0.25,
-            verify_rejected: 0,
-            ..ModelPolicyConfig::default()
+        let validated = |verify_top, verify_floor, verify_rejected| {
+            let config = ModelPolicyConfig {
+                verify_top,
+                verify_floor,
+                verify_rejected,
+                ..ModelPolicyConfig::default()
+            };
+            config.validate()
         };
         assert_eq!(
-            config.validate(),
+            validated(0, 0.25, 0),
             Err(ConfigError::FloorWithoutDepthTest { floor: 0.25 })
         );
-        let on = ModelPolicyConfig {
-            verify_floor: 0.25,
-            ..ModelPolicyConfig::default()
-        };
-        assert_eq!(on.validate(), Ok(()));
-        let second_pass_alone = ModelPolicyConfig {
-            verify_top: 0,
-            verify_rejected: 50,
-            ..ModelPolicyConfig::default()
-        };
         assert_eq!(
-            second_pass_alone.validate(),
+            validated(0, 0.0, 50),
             Err(ConfigError::RejectedWithoutDepthTest { count: 50 })
         );
-        let test_off = ModelPolicyConfig {
-            verify_top: 0,
-            verify_rejected: 0,
-            ..ModelPolicyConfig::default()
-        };
-        assert_eq!(test_off.validate(), Ok(()));
+        assert_eq!(validated(200, 0.25, 200), Ok(()));
+        assert_eq!(validated(0, 0.0, 0), Ok(()));
     }
 }

@@ -271,28 +271,11 @@ fn bad_inputs_are_one_line_errors_with_exit_status_2() {
     assert_user_error(&out, &["--centring", "--collision-check full", "walls"]);
     let out = setup.run(&["eval", "--task", "test", "--verify-floor", "1.5"]);
     assert_user_error(&out, &["1.5", "fraction from 0 to 1"]);
-    let floor_alone = [
-        "eval",
-        "--task",
-        "test",
-        "--verify-top",
-        "0",
-        "--verify-floor",
-        "0.25",
-    ];
-    let out = setup.run(&floor_alone);
-    assert_user_error(&out, &["--verify-floor 0.25", "--verify-top 0"]);
-    let second_pass_alone = [
-        "eval",
-        "--task",
-        "test",
-        "--verify-top",
-        "0",
-        "--verify-rejected",
-        "50",
-    ];
-    let out = setup.run(&second_pass_alone);
-    assert_user_error(&out, &["--verify-rejected 50", "--verify-top 0"]);
+    // Both options belong to the depth test, which --verify-top 0 turns off.
+    for (flag, value) in [("--verify-floor", "0.25"), ("--verify-rejected", "50")] {
+        let out = setup.run(&["eval", "--task", "test", "--verify-top", "0", flag, value]);
+        assert_user_error(&out, &[&format!("{flag} {value}"), "--verify-top 0"]);
+    }
     let out = setup.run(&["eval", "--task", "test", "--resume"]);
     assert_user_error(&out, &["--resume", "--json"]);
     let corrupt = setup.path("corrupt.safetensors");
