@@ -7,7 +7,8 @@ use std::time::{Duration, Instant};
 
 use graspmap::assets::objects::{ObjectLibrary, SplitFile};
 use graspmap::grasp::world_grasp;
-use graspmap::policy::oracle::{self, OracleConfig};
+use graspmap::policy::oracle;
+use graspmap::policy::verify::CheckConfig;
 use graspmap::sim::Workcell;
 use graspmap::vision::camera::Camera;
 use graspmap::vision::render::{render, Drawable, Shape, TriMesh};
@@ -82,7 +83,7 @@ fn main() {
             cell.drop_objects(std::slice::from_ref(model), seed)
                 .unwrap();
             let frame = cell.capture();
-            if let Ok(plan) = oracle::plan(&camera, &frame, 1, &OracleConfig::default()) {
+            if let Ok(plan) = oracle::plan(&camera, &frame, 1, &CheckConfig::default()) {
                 let outcome = cell.pick(&world_grasp(&camera, &frame, plan.grasp));
                 successes += usize::from(outcome.success);
             }

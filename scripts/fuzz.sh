@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The long fuzz pass: every parser and loader fed random mutations of real files (src/fuzz.rs).
+# The long fuzz pass: every parser and loader fed random mutations of real files (the `mod fuzz` beside each parser).
 # CI runs 1,000 cases per parser as part of ./test.sh; this runs 100,000 per JSON file (labels,
 # clicks, split, progress, the checkpoint's training state) and 10,000 per binary or XML format
 # (safetensors, URDF, OBJ, STL, PNG, JPEG), and prints the counts. Usage: scripts/fuzz.sh [SCALE]

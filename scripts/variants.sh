@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The issue-14 measurement, end to end from nothing: for each variant (input × clutter), label 60
 # labels into its own data dir, train 30 epochs, run every eval on the same seeded scenes, then
-# print the markdown table (BENCHMARKS.md, "Stop 12: depth input and clutter labels") and write a JSON
+# print the markdown table (BENCHMARKS.md#input-and-label-variants) and write a JSON
 # summary with the decision rule of docs/departures.md evaluated. Deterministic from the seeds
 # (the times aside).
 #

@@ -1,7 +1,7 @@
 //! Statistics for evaluation reports: success rates with Wilson intervals, mean and spread.
 
 /// A success rate with its 95 % Wilson score interval.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Rate {
     /// Successes.
     pub(crate) successes: usize,
@@ -64,7 +64,7 @@ impl Rate {
 }
 
 /// Mean and sample standard deviation (n − 1; 0 for fewer than two values).
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub(crate) struct Spread {
     /// Mean.
     pub(crate) mean: f64,
@@ -123,7 +123,7 @@ pub(crate) fn median(values: &[f64]) -> f64 {
 }
 
 /// How often each failure reason occurred: the one tally behind every report's failure column.
-#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(transparent)]
 pub(crate) struct FailureTally(std::collections::BTreeMap<String, usize>);
 
@@ -140,6 +140,11 @@ impl FailureTally {
             tally.add(reason);
         }
         tally
+    }
+
+    /// Each reason's count, in name order.
+    pub(crate) fn counts(&self) -> &std::collections::BTreeMap<String, usize> {
+        &self.0
     }
 
     /// "collision 2, slipped 1", or "-" when nothing failed.

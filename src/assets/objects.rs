@@ -241,3 +241,24 @@ impl Split {
         self.train.iter().chain(&self.test).cloned().collect()
     }
 }
+
+#[cfg(test)]
+mod fuzz {
+    use std::path::Path;
+
+    use proptest::prelude::*;
+
+    use crate::data::fuzzing::{check, config, edits, mutate, text};
+
+    const SPLIT: &str = include_str!("../../assets/objects/split.json");
+
+    proptest! {
+        #![proptest_config(config())]
+
+        #[test]
+        fn fuzz_json_split(edits in edits()) {
+            let input = text(&mutate(SPLIT.as_bytes(), &edits));
+            check(|| crate::assets::objects::Split::parse(&input, Path::new("split.json")))?;
+        }
+    }
+}

@@ -644,3 +644,60 @@ mod tests {
         assert!(err.to_string().contains("collision_vhacd.obj"), "{err}");
     }
 }
+
+#[cfg(test)]
+mod fuzz {
+    use std::path::Path;
+
+    use proptest::prelude::*;
+    use rapier3d::math::Vector;
+
+    use crate::data::fuzzing::{check, config, edits, mutate, text};
+
+    const HAMMER_URDF: &str = include_str!("../../assets/objects/YcbHammer/model.urdf");
+    const CUBE_OBJ: &str =
+        "o piece\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 3\nf 1 2 4\nf 1 3 4\nf 2 3 4\n";
+
+    fn binary_stl() -> Vec<u8> {
+        let mut bytes = vec![0u8; 80];
+        bytes.extend(2u32.to_le_bytes());
+        for triangle in [[[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]; 2] {
+            bytes.extend([0.0f32; 3].iter().flat_map(|c| c.to_le_bytes()));
+            for vertex in triangle {
+                bytes.extend(vertex.iter().flat_map(|c| c.to_le_bytes()));
+            }
+            bytes.extend(0u16.to_le_bytes());
+        }
+        bytes
+    }
+
+    proptest! {
+        #![proptest_config(config())]
+
+        #[test]
+        fn fuzz_urdf(edits in edits()) {
+            let input = text(&mutate(HAMMER_URDF.as_bytes(), &edits));
+            check(|| {
+                let file = crate::assets::urdf::UrdfFile::parse(&input, Path::new("model.urdf"))?;
+                crate::assets::objects::object_from_urdf("Fuzzed", &file)
+                    .map_err(|e| anyhow::anyhow!("{e}"))
+            })?;
+        }
+
+        #[test]
+        fn fuzz_obj(edits in edits()) {
+            let input = mutate(CUBE_OBJ.as_bytes(), &edits);
+            check(|| {
+                crate::assets::urdf::load_mesh_bytes(input, Path::new("/nonexistent/piece.obj"), Vector::ONE)
+            })?;
+        }
+
+        #[test]
+        fn fuzz_stl(edits in edits()) {
+            let input = mutate(&binary_stl(), &edits);
+            check(|| {
+                crate::assets::urdf::load_mesh_bytes(input, Path::new("/nonexistent/piece.stl"), Vector::ONE)
+            })?;
+        }
+    }
+}

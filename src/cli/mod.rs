@@ -10,13 +10,18 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::commands;
 use crate::commands::bench::{BenchConfig, PeerPython};
-use crate::commands::eval::{PolicyKind, Task};
 use crate::commands::scene::SceneConfig;
 use crate::data::input::InputKind;
 use crate::grasp::PixelGrasp;
+use crate::model::config::TrainConfig;
 use crate::model::unet::Precision;
 use crate::named::Named;
 use crate::policy::collision::CollisionCheck;
+use crate::policy::model::ModelPolicyConfig;
+use crate::policy::suppression::SuppressionConfig;
+use crate::policy::PolicyKind;
+use crate::present::eval_report::Task;
+use crate::sim::WorkcellConfig;
 
 /// Teach a simulated UR5 to pick up objects it has never seen, from a few dozen labelled grasps.
 #[derive(Debug, Parser)]
@@ -105,13 +110,13 @@ pub(crate) struct BenchTrainArgs {
 #[derive(Debug, Args)]
 pub(crate) struct TrainArgs {
     /// Epochs to train (30 is usually enough).
-    #[arg(long, default_value_t = 101, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = TrainConfig::default().epochs, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) epochs: u32,
     /// Images per optimiser step.
-    #[arg(long, default_value_t = 8, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = TrainConfig::default().batch_size as u32, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) batch_size: u32,
     /// Initial Adam learning rate.
-    #[arg(long, default_value_t = 1e-3, value_parser = positive::<f64>)]
+    #[arg(long, default_value_t = TrainConfig::default().lr, value_parser = positive::<f64>)]
     pub(crate) lr: f64,
     /// Seed of the 90/10 split, initial weights, data order and augmentation.
     #[arg(long, default_value_t = 0)]
@@ -194,7 +199,7 @@ pub(crate) struct EvalArgs {
     )]
     pub(crate) n_past_action: usize,
     /// Suppression: standard deviation of the subtracted Gaussian in pixels.
-    #[arg(long, value_name = "PX", default_value_t = 4.0, value_parser = positive::<f32>)]
+    #[arg(long, value_name = "PX", default_value_t = SuppressionConfig::default().sigma_px, value_parser = positive::<f32>)]
     pub(crate) suppression_sigma: f32,
     /// Suppression: also lower the rotations within this many 22.5° bins of the failed one
     /// (0 = its own rotation only, 4 = all).
@@ -208,25 +213,25 @@ pub(crate) struct EvalArgs {
     #[arg(long, value_parser = named::<CollisionCheck>(), default_value = "full")]
     pub(crate) collision_check: CollisionCheck,
     /// Model policy: execute the first of the N best actions (after suppression and the
-    /// collision check) that passes the planner's depth test: the object fits the open jaw with
+    /// collision check) that passes verification, the planner's test on the depth image: the object fits the open jaw with
     /// room to spare, both pads come down in free space and seen, and they close on flat faces
     /// across the object, not on an edge; when none passes, the second pass (--verify-rejected),
     /// then the argmax (0 = plain argmax).
-    #[arg(long, value_name = "N", default_value_t = 200)]
+    #[arg(long, value_name = "N", default_value_t = ModelPolicyConfig::default().verify_top)]
     pub(crate) verify_top: usize,
-    /// Model policy: the depth test may replace the argmax only with a candidate scoring at
+    /// Model policy: verification may replace the argmax only with a candidate scoring at
     /// least this fraction of it (0 = any of the N best). 0.25 picks more objects alone in the
-    /// bin and about as many in clutter (BENCHMARKS.md, "Stop 17").
-    #[arg(long, value_name = "F", default_value_t = 0.0, value_parser = fraction)]
+    /// bin and about as many in clutter (BENCHMARKS.md#verification).
+    #[arg(long, value_name = "F", default_value_t = ModelPolicyConfig::default().verify_floor, value_parser = fraction)]
     pub(crate) verify_floor: f32,
-    /// Model policy: when none of the N best allowed actions passes the depth test, test the
+    /// Model policy: when none of the N best allowed actions passes verification, verify the
     /// best M of the network's actions before the collision check, and execute the first that
     /// passes (0 = off; default: the same N as --verify-top).
     #[arg(long, value_name = "M")]
     pub(crate) verify_rejected: Option<usize>,
     /// Model policy: move the chosen grasp to the middle of the surface under it, turning it to
     /// an angle that fits there if needed (needs `--collision-check full`). Off by default: it
-    /// moves more objects in empty_bin but picks fewer training objects (BENCHMARKS.md).
+    /// moves more objects in empty_bin but picks fewer training objects (BENCHMARKS.md#centring).
     #[arg(long)]
     pub(crate) centring: bool,
     /// empty_bin: most pick attempts per scene.
@@ -467,7 +472,7 @@ pub(crate) struct GraspArgs {
     #[arg(long, value_name = "VIDEO")]
     pub(crate) record: Option<PathBuf>,
     /// Grip force per finger in newtons.
-    #[arg(long, default_value_t = 40.0, value_parser = positive::<f32>)]
+    #[arg(long, default_value_t = WorkcellConfig::default().grip_force, value_parser = positive::<f32>)]
     pub(crate) grip_force: f32,
     /// Also save the camera image with the grasp drawn (.png).
     #[arg(long, value_name = "PNG")]
@@ -525,7 +530,7 @@ pub fn run() -> anyhow::Result<()> {
             Command::Label(_) | Command::Train(_) | Command::Eval(_)
         )
     {
-        commands::interrupt::install().context("installing the Ctrl-C handler")?;
+        crate::interrupt::install().context("installing the Ctrl-C handler")?;
     }
     let context = cli.global.context()?;
     let data = context.data.clone();
@@ -547,7 +552,7 @@ pub fn run() -> anyhow::Result<()> {
             commands::eval::run(&context, config)
         }
         Command::Predict(args) => commands::predict::run(&context, args.config(&data)),
-        Command::Report(args) => commands::report_page::run(&context, args.config(&data)?),
+        Command::Report(args) => commands::report::run(&context, args.config(&data)?),
         Command::Bench(BenchCommand::Train(args)) => commands::bench::run(
             &context,
             BenchConfig {

@@ -11,14 +11,14 @@ use crate::commands::eval::EvalConfig;
 use crate::commands::grasp::{GraspChoice, GraspConfig};
 use crate::commands::label::{ClickNoise, ClickSource, LabelConfig};
 use crate::commands::predict::PredictConfig;
-use crate::commands::report_page::ReportConfig;
+use crate::commands::report::ReportConfig;
 use crate::commands::train::TrainOptions;
-use crate::commands::video::VideoFormat;
 use crate::commands::Context;
 use crate::grasp::PixelGrasp;
-use crate::model::train::TrainConfig;
-use crate::policy::affordance::SuppressionConfig;
+use crate::model::config::TrainConfig;
 use crate::policy::model::ModelPolicyConfig;
+use crate::policy::suppression::SuppressionConfig;
+use crate::present::video::VideoFormat;
 use crate::sim::WorkcellConfig;
 
 impl GlobalArgs {

@@ -8,10 +8,11 @@ use std::time::Instant;
 use anyhow::{bail, Context as _};
 use tch::{nn, Device, Kind, Tensor};
 
-use super::report::write_report;
 use super::Context;
 use crate::model::train::{loss, Adam};
 use crate::model::unet::{MiniUNet, Precision};
+use crate::named::Named;
+use crate::present::envelope::write_report;
 
 /// The Python peer, compiled in so that an installed binary can run it from anywhere.
 const PEER_SCRIPT: &str = include_str!("../../scripts/bench_peer.py");

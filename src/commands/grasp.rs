@@ -5,14 +5,16 @@ use std::time::Instant;
 
 use anyhow::Context as _;
 
-use super::report::write_report;
-use super::video::save_video_atomic;
 use super::Context;
 use crate::data::atomic::save_image_atomic;
 use crate::grasp::draw::draw_grasp;
 use crate::grasp::{world_grasp, PixelGrasp};
+use crate::named::Named;
 use crate::policy::baselines::random_grasp;
-use crate::policy::oracle::{self, OracleConfig};
+use crate::policy::oracle;
+use crate::policy::verify::CheckConfig;
+use crate::present::envelope::write_report;
+use crate::present::video::save_video_atomic;
 use crate::sim::pick::{PickOutcome, PickReason};
 use crate::sim::{Workcell, WorkcellConfig};
 
@@ -100,7 +102,7 @@ pub(crate) fn run(context: &Context, args: GraspConfig) -> anyhow::Result<()> {
                 &camera,
                 &frame,
                 cell.objects()[0].id,
-                &OracleConfig::default(),
+                &CheckConfig::default(),
             );
             (
                 GraspSource::Oracle,
@@ -146,7 +148,7 @@ pub(crate) fn run(context: &Context, args: GraspConfig) -> anyhow::Result<()> {
         let resolved = serde_json::json!({
             "global": context,
             "workcell": config,
-            "oracle": OracleConfig::default(),
+            "oracle": CheckConfig::default(),
             "object": args.object,
             "source": source,
             "record": args.record,
@@ -165,7 +167,7 @@ fn result_line(r: &GraspResults, seed: u64) -> String {
         "{} seed {seed}: {} [{}] {grasp}: {} (sim {:.2} s, wall {:.2} s)",
         r.object,
         if r.success { "success" } else { "failure" },
-        r.reason.as_str(),
+        r.reason.name(),
         r.detail,
         r.sim_seconds,
         r.wall_seconds

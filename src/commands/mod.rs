@@ -3,15 +3,11 @@
 pub(crate) mod bench;
 pub(crate) mod eval;
 pub(crate) mod grasp;
-pub mod interrupt;
 pub(crate) mod label;
 pub(crate) mod predict;
 pub(crate) mod report;
-pub(crate) mod report_page;
 pub(crate) mod scene;
 pub(crate) mod train;
-pub(crate) mod video;
-pub(crate) mod web;
 
 use std::path::{Path, PathBuf};
 

@@ -2,20 +2,17 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 use image::RgbImage;
 
-use super::report::write_report;
 use super::Context;
 use crate::data::atomic::save_image_atomic;
-use crate::data::input::{read_depth_png, rotated_inputs, InputKind, NetInput};
-use crate::grasp::IMAGE_SIZE;
-use crate::model::inference::AffordanceModel;
+use crate::data::input::{read_depth_png, InputKind, NetInput};
+use crate::data::observation::read_observation;
+use crate::model::inference::{AffordanceModel, Scored};
+use crate::model::maps::{visualisation, Choice};
 use crate::model::unet::Precision;
-use crate::policy::affordance::{visualisation, Choice};
-
-/// Largest image side `predict` decodes before it checks for 128 × 128 (px).
-const MAX_DECODED_SIDE: u32 = 4096;
+use crate::present::envelope::write_report;
 
 /// What `graspmap predict` reads and writes, resolved by the CLI.
 #[derive(Debug, Clone)]
@@ -62,9 +59,7 @@ pub(crate) fn run(context: &Context, args: PredictConfig) -> anyhow::Result<()> 
     let model = AffordanceModel::load(checkpoint, precision)?;
     let input = observation_input(&model, checkpoint, image, args.depth.as_deref())?;
     let start = std::time::Instant::now();
-    let rotated_input = rotated_inputs(&input);
-    let maps = model.predict(&rotated_input)?;
-    let rotated: Vec<RgbImage> = rotated_input.into_iter().map(|r| r.rgb).collect();
+    let Scored { rotated, maps } = model.score(&input)?;
     let choice = maps.choose();
     let network_seconds = start.elapsed().as_secs_f64();
     let out = args.out.clone();
@@ -126,54 +121,5 @@ fn observation_input(
             let depth = read_depth_png(path)?;
             Ok(NetInput::new(InputKind::Rgbd, image, Some(&depth)))
         }
-    }
-}
-
-/// Reads a 128 × 128 8-bit RGB image (an opaque RGBA one is accepted), or says what is wrong.
-pub(crate) fn read_observation(path: &Path) -> anyhow::Result<RgbImage> {
-    let bytes =
-        std::fs::read(path).with_context(|| format!("cannot open --image {}", path.display()))?;
-    decode_observation(&bytes, path)
-}
-
-/// Decodes an observation from its bytes (PNG or JPEG, by content); `path` names it in errors.
-pub(crate) fn decode_observation(bytes: &[u8], path: &Path) -> anyhow::Result<RgbImage> {
-    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes))
-        .with_guessed_format()
-        .with_context(|| format!("cannot read --image {}", path.display()))?;
-    // A header may claim any size; nothing near this is a camera image.
-    let mut limits = image::Limits::default();
-    limits.max_image_width = Some(MAX_DECODED_SIDE);
-    limits.max_image_height = Some(MAX_DECODED_SIDE);
-    reader.limits(limits);
-    let decoded = reader.decode().with_context(|| {
-        format!(
-            "--image {} is not a readable image (give a PNG or JPEG)",
-            path.display()
-        )
-    })?;
-    let (w, h) = (decoded.width(), decoded.height());
-    if (w, h) != (IMAGE_SIZE, IMAGE_SIZE) {
-        bail!(
-            "--image {} is {w}×{h}; the model needs {IMAGE_SIZE}×{IMAGE_SIZE} top-down camera images (resize or crop it)",
-            path.display()
-        );
-    }
-    match decoded {
-        image::DynamicImage::ImageRgb8(rgb) => Ok(rgb),
-        image::DynamicImage::ImageRgba8(rgba) => {
-            if rgba.pixels().any(|p| p.0[3] != 255) {
-                bail!(
-                    "--image {} has transparent pixels; save it as 8-bit RGB without alpha",
-                    path.display()
-                );
-            }
-            Ok(image::DynamicImage::ImageRgba8(rgba).into_rgb8())
-        }
-        other => bail!(
-            "--image {} is {:?}, not 8-bit RGB; save it as 8-bit RGB",
-            path.display(),
-            other.color()
-        ),
     }
 }

@@ -1,63 +1,81 @@
-//! The versioned JSON envelope every command's `--json` report shares (docs/data.md).
+//! `graspmap report`: write the run's HTML page (present::report_page), and with `--serve`
+//! serve it and the labels page over HTTP until Ctrl-C.
 
-use std::io::Write;
-use std::path::Path;
+use std::net::IpAddr;
+use std::path::PathBuf;
 
-use serde::Serialize;
+use super::Context;
+use crate::data::labels::LabelStore;
+use crate::present::envelope::write_report;
+use crate::present::report_page::{files_dir, write_report_page};
+use crate::present::web::labels_page::{self, DiskLabels};
+use crate::present::web::report_route::ReportRoute;
+use crate::present::web::{Reply, Request, WebServer};
 
-use crate::data::atomic::write_atomic;
-
-/// The envelope of every `--json` report.
-#[derive(Debug, Serialize)]
-pub(crate) struct Report<'a, C: Serialize, R: Serialize> {
-    /// `graspmap.<command>/<version>`.
-    pub(crate) schema: String,
-    /// Crate version.
-    pub(crate) version: &'static str,
-    /// Git commit the binary was built from.
-    pub(crate) git_commit: &'static str,
-    /// Seeds that drove the run.
-    pub(crate) seed: u64,
-    /// The fully resolved configuration.
-    pub(crate) config: &'a C,
-    /// The command's results.
-    pub(crate) results: &'a R,
+/// Everything one `graspmap report` run needs, resolved by the CLI.
+#[derive(Debug, Clone, serde::Serialize)]
+pub(crate) struct ReportConfig {
+    /// Where the page goes; its files go to `<stem>_files/` beside it.
+    pub(crate) out: PathBuf,
+    /// `--serve`: serve the report and the labels page on this address until Ctrl-C.
+    pub(crate) serve: Option<(std::net::IpAddr, u16)>,
 }
 
-/// Writes a report to `target` (`-` = stdout) with schema `graspmap.<command>/1`.
-pub(crate) fn write_report<C: Serialize, R: Serialize>(
-    target: &Path,
-    command: &str,
-    seed: u64,
-    config: &C,
-    results: &R,
-) -> anyhow::Result<()> {
-    write_versioned_report(target, command, 1, seed, config, results)
-}
-
-/// Writes a report with schema `graspmap.<command>/<version>` (docs/data.md lists the versions).
-pub(crate) fn write_versioned_report<C: Serialize, R: Serialize>(
-    target: &Path,
-    command: &str,
-    version: u32,
-    seed: u64,
-    config: &C,
-    results: &R,
-) -> anyhow::Result<()> {
-    let report = Report {
-        schema: format!("graspmap.{command}/{version}"),
-        version: env!("CARGO_PKG_VERSION"),
-        git_commit: env!("GRASPMAP_GIT_COMMIT"),
-        seed,
-        config,
-        results,
-    };
-    let mut text = serde_json::to_string_pretty(&report)?;
-    text.push('\n');
-    if target == Path::new("-") {
-        std::io::stdout().write_all(text.as_bytes())?;
-        Ok(())
-    } else {
-        write_atomic(target, text.as_bytes())
+/// Runs the command.
+pub(crate) fn run(context: &Context, config: ReportConfig) -> anyhow::Result<()> {
+    let written = write_report_page(&context.data, &config.out)?;
+    context.say(&format!(
+        "wrote {} and {} files in {}",
+        config.out.display(),
+        written.len() - 1,
+        files_dir(&config.out).display()
+    ));
+    if let Some(json) = &context.json {
+        write_report(
+            json,
+            "report",
+            0,
+            &serde_json::json!({ "global": context, "out": config.out }),
+            &serde_json::json!({ "page": config.out, "files": &written[1..] }),
+        )?;
     }
+    if let Some((host, port)) = config.serve {
+        return serve(context, &config.out, host, port);
+    }
+    Ok(())
+}
+
+/// `report --serve`: the report at `/report` (and `/`), the labels page at `/labels`, until
+/// Ctrl-C. Deleting a label takes the labels' writer lock for its duration.
+fn serve(context: &Context, out: &std::path::Path, host: IpAddr, port: u16) -> anyhow::Result<()> {
+    let server = WebServer::bind(host, port)?;
+    let url = server.url();
+    context.say(&format!(
+        "report at {url}report, labels at {url}labels (Ctrl-C stops the server)"
+    ));
+    let report = ReportRoute {
+        data: context.data.clone(),
+        out: out.to_path_buf(),
+    };
+    let labels = DiskLabels {
+        store: LabelStore::new(context.data.join("labels")),
+    };
+    let root = |request: &Request| {
+        (request.path == "/").then(|| {
+            report
+                .answer(&Request {
+                    method: request.method.clone(),
+                    path: "/report".into(),
+                    body: Vec::new(),
+                })
+                .unwrap_or_else(|| Reply::not_found("/report"))
+        })
+    };
+    let report = |request: &Request| report.answer(request);
+    let labels = |request: &Request| labels_page::answer(&labels, request);
+    server.serve(&[&root, &report, &labels], &|| {
+        crate::interrupt::requested().is_some()
+    });
+    context.say("server stopped");
+    Ok(())
 }

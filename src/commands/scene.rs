@@ -6,9 +6,9 @@ use anyhow::Context as _;
 
 use std::path::PathBuf;
 
-use super::report::write_report;
 use super::Context;
 use crate::data::atomic::save_image_atomic;
+use crate::present::envelope::write_report;
 use crate::sim::{Workcell, WorkcellConfig};
 
 /// What `graspmap scene` drops and where it writes the views.

@@ -7,8 +7,6 @@ use std::time::Instant;
 use anyhow::{bail, Context as _};
 use tch::nn;
 
-use super::interrupt::{self, Interrupted};
-use super::report::write_report;
 use super::Context;
 use crate::data::atomic::{save_image_atomic, write_atomic};
 use crate::data::augment::AugmentConfig;
@@ -16,11 +14,15 @@ use crate::data::dataset::{load_dataset, split_train_validation, training_sample
 use crate::data::labels::LabelStore;
 use crate::data::lock::StoreLock;
 use crate::grasp::IMAGE_SIZE;
-use crate::model::train::{
-    load_weights, predict_map, read_checkpoint, save_checkpoint, train_epoch, validate, Adam,
-    CheckpointMeta, EpochRecord, Plateau, Subset, TrainConfig,
+use crate::interrupt::{self, Interrupted};
+use crate::model::checkpoint::{
+    load_weights, read_checkpoint, save_checkpoint, CheckpointMeta, EpochRecord,
 };
+use crate::model::config::{Plateau, TrainConfig};
+use crate::model::train::{predict_map, train_epoch, validate, Adam, Subset};
 use crate::model::unet::{MiniUNet, Precision};
+use crate::named::Named;
+use crate::present::envelope::write_report;
 use crate::vision::colormap::viridis;
 
 /// What `graspmap train` runs.

@@ -12,6 +12,7 @@ use image::{GrayImage, ImageBuffer, Luma, RgbImage};
 use crate::grasp::rotate::{warp_affine, warp_affine_gray};
 use crate::grasp::tote::FLOOR_TOP;
 use crate::grasp::{bin_angle, BINS, IMAGE_SIZE};
+use crate::named::named_enum;
 use crate::vision::camera::TOP_DOWN_EYE_HEIGHT;
 
 /// A depth image as `scene --depth` and `label` write it: 16-bit millimetres along the
@@ -23,17 +24,16 @@ pub type DepthMm = ImageBuffer<Luma<u16>, Vec<u16>>;
 /// its floor) and the tallest stacks still fit below it.
 pub(crate) const HEIGHT_FULL_SCALE_MM: f32 = 255.0;
 
-/// Which planes the network takes.
-#[derive(
-    Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize, Hash,
-)]
-#[serde(rename_all = "lowercase")]
-pub enum InputKind {
-    /// RGB only, the reference's input.
-    #[default]
-    Rgb,
-    /// RGB and the height above the tote floor.
-    Rgbd,
+named_enum! {
+    /// Which planes the network takes.
+    #[derive(Default, serde::Deserialize, Hash)]
+    pub enum InputKind {
+        /// RGB only, the reference's input.
+        #[default]
+        Rgb = "rgb", "the camera's RGB (the reference's input)",
+        /// RGB and the height above the tote floor.
+        Rgbd = "rgbd", "RGB and the height above the tote floor from the depth image",
+    }
 }
 
 impl InputKind {
@@ -48,30 +48,6 @@ impl InputKind {
     /// True for the reference's input (checkpoints then leave the field out, as before).
     pub(crate) fn is_rgb(&self) -> bool {
         *self == InputKind::Rgb
-    }
-}
-
-impl crate::named::Named for InputKind {
-    const ALL: &'static [Self] = &[InputKind::Rgb, InputKind::Rgbd];
-
-    fn name(self) -> &'static str {
-        match self {
-            InputKind::Rgb => "rgb",
-            InputKind::Rgbd => "rgbd",
-        }
-    }
-
-    fn help(self) -> &'static str {
-        match self {
-            InputKind::Rgb => "the camera's RGB (the reference's input)",
-            InputKind::Rgbd => "RGB and the height above the tote floor from the depth image",
-        }
-    }
-}
-
-impl std::fmt::Display for InputKind {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(crate::named::Named::name(*self))
     }
 }
 

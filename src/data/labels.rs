@@ -15,6 +15,8 @@ use crate::grasp::{PixelGrasp, IMAGE_SIZE};
 
 /// The labels file name inside the labels directory.
 pub(crate) const LABELS_FILE: &str = "labels.json";
+/// File-name ending of a label's depth image, after `<Object>_<k>` (data::depth_files checks them).
+pub(crate) const DEPTH_SUFFIX: &str = "_depth.png";
 
 /// One labelled grasp: integer pixel and angle in degrees.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -56,9 +58,24 @@ pub struct Labels {
 /// Problems with a labels file or dataset.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LabelError {
-    /// The file is not JSON of the expected shape.
-    #[error("{path}: {message}")]
-    Format { path: PathBuf, message: String },
+    /// The file is not JSON.
+    #[error("{path}: not valid JSON: {error}")]
+    NotJson { path: PathBuf, error: String },
+    /// The top level is not an object of objects' labels.
+    #[error("{path}: expected an object {{\"<Object>\": [[x, y, angle], ...]}}")]
+    NotAnObject { path: PathBuf },
+    /// An object's value is not a list.
+    #[error("{path}: '{object}' must map to a list of [x, y, angle]")]
+    NotAList { path: PathBuf, object: String },
+    /// One label is not a valid `[x, y, angle]`.
+    #[error("{path}: '{object}' label {index}: {problem}")]
+    BadLabel {
+        path: PathBuf,
+        object: String,
+        /// 1-based, as in the file's list.
+        index: usize,
+        problem: String,
+    },
 }
 
 impl Labels {
@@ -137,24 +154,29 @@ impl Labels {
 
     /// Parses `labels.json` text (the reference tool's format; `path` is for messages).
     pub fn parse(text: &str, path: &Path) -> Result<Self, LabelError> {
-        let err = |message: String| LabelError::Format {
-            path: path.to_owned(),
-            message,
-        };
+        let path = || path.to_owned();
         let value: serde_json::Value =
-            serde_json::from_str(text).map_err(|e| err(format!("not valid JSON: {e}")))?;
+            serde_json::from_str(text).map_err(|e| LabelError::NotJson {
+                path: path(),
+                error: e.to_string(),
+            })?;
         let map = value
             .as_object()
-            .ok_or_else(|| err("expected an object {\"<Object>\": [[x, y, angle], ...]}".into()))?;
+            .ok_or_else(|| LabelError::NotAnObject { path: path() })?;
         let mut labels = Labels::default();
         for (object, list) in map {
-            let list = list
-                .as_array()
-                .ok_or_else(|| err(format!("'{object}' must map to a list of [x, y, angle]")))?;
+            let list = list.as_array().ok_or_else(|| LabelError::NotAList {
+                path: path(),
+                object: object.clone(),
+            })?;
             let mut parsed = Vec::with_capacity(list.len());
             for (i, entry) in list.iter().enumerate() {
-                let label = parse_label(entry)
-                    .map_err(|m| err(format!("'{object}' label {}: {m}", i + 1)))?;
+                let label = parse_label(entry).map_err(|problem| LabelError::BadLabel {
+                    path: path(),
+                    object: object.clone(),
+                    index: i + 1,
+                    problem,
+                })?;
                 parsed.push(label);
             }
             labels.entries.push((object.clone(), parsed));
@@ -236,8 +258,7 @@ impl LabelStore {
     /// Path of the depth image beside the k-th image of an object: a sidecar of
     /// `<Object>_<k>_rgb.png` with the same `<Object>_<k>` stem (docs/data.md).
     pub(crate) fn depth_path(&self, object: &str, k: usize) -> PathBuf {
-        self.dir
-            .join(format!("{object}_{k}{}", super::depth::DEPTH_SUFFIX))
+        self.dir.join(format!("{object}_{k}{}", DEPTH_SUFFIX))
     }
 
     /// Deletes temporary files a killed run left behind (they are never read, but would
@@ -313,7 +334,7 @@ impl LabelStore {
             let name = name.to_string_lossy();
             if name == LABELS_FILE
                 || name.ends_with("_rgb.png")
-                || name.ends_with(super::depth::DEPTH_SUFFIX)
+                || name.ends_with(DEPTH_SUFFIX)
                 || name == PROGRESS_FILE
             {
                 std::fs::remove_file(entry.path())
@@ -657,5 +678,38 @@ mod tests {
             Labels::parse(r#"{"A": [[1, 2, -22.5], [1, 2, 180.0]]}"#, Path::new("l")).unwrap();
         assert_eq!(labels.of("A")[0].angle, 157.5);
         assert_eq!(labels.of("A")[1].angle, 0.0);
+    }
+}
+
+#[cfg(test)]
+mod fuzz {
+    use std::path::Path;
+
+    use proptest::prelude::*;
+
+    use crate::data::fuzzing::{check, config, edits, mutate, text};
+
+    const LABELS: &str = include_str!("../../tests/fixtures/reference-labels/labels.json");
+
+    fn progress_json() -> String {
+        r#"{"schema": "graspmap.label-progress/1", "seed": 0, "source": "scripted",
+            "rounds": [{"object": "YcbHammer", "rounds": 14, "labels": 12}]}"#
+            .to_owned()
+    }
+
+    proptest! {
+        #![proptest_config(config())]
+
+        #[test]
+        fn fuzz_json_labels(edits in edits()) {
+            let input = text(&mutate(LABELS.as_bytes(), &edits));
+            check(|| crate::data::labels::Labels::parse(&input, Path::new("labels.json")))?;
+        }
+
+        #[test]
+        fn fuzz_json_progress(edits in edits()) {
+            let input = text(&mutate(progress_json().as_bytes(), &edits));
+            check(|| crate::data::labels::Progress::parse(&input, Path::new("progress.json")))?;
+        }
     }
 }

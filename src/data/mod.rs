@@ -7,10 +7,14 @@
 
 pub(crate) mod atomic;
 pub mod augment;
+pub(crate) mod clicks;
 pub mod clutter;
 pub mod dataset;
-pub mod depth;
+pub mod depth_files;
+#[cfg(test)]
+pub(crate) mod fuzzing;
 pub mod input;
 pub mod labels;
 pub mod lock;
+pub(crate) mod observation;
 pub(crate) mod relabel;

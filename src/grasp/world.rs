@@ -2,12 +2,15 @@
 
 use rapier3d::math::Vector;
 
+use super::tote::FLOOR_TOP;
 use super::{normalize_angle, PixelGrasp};
 use crate::vision::camera::Camera;
 use crate::vision::render::Frame;
 
-/// Lowest TCP height (m): 2 mm above the tote floor.
-pub const MIN_TCP_HEIGHT: f32 = 0.022;
+/// How far above the tote floor the TCP stays at the lowest (m).
+pub const FLOOR_CLEARANCE: f32 = 0.002;
+/// Lowest TCP height (m): [`FLOOR_CLEARANCE`] above the tote floor (0.022).
+pub const MIN_TCP_HEIGHT: f32 = FLOOR_TOP + FLOOR_CLEARANCE;
 /// How far below the clicked surface the TCP goes (m).
 pub const DEPTH_BELOW_SURFACE: f32 = 0.05;
 

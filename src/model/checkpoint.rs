@@ -12,10 +12,132 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
 use safetensors::tensor::{Dtype, SafeTensors, View};
-use tch::{Kind, Tensor};
+use serde::{Deserialize, Serialize};
+use tch::{nn, Kind, Tensor};
 
-use super::train::CheckpointMeta;
+use super::config::{Plateau, TrainConfig};
 use crate::data::atomic::write_atomic;
+
+/// One epoch's record.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct EpochRecord {
+    /// 1-based epoch.
+    pub epoch: u32,
+    /// Mean training loss (BCE with logits).
+    pub train_loss: f64,
+    /// Mean validation loss.
+    pub val_loss: f64,
+    /// Learning rate used in the epoch.
+    pub lr: f64,
+    /// Wall seconds of the epoch.
+    pub(crate) seconds: f64,
+}
+
+/// The JSON sidecar of a checkpoint.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct CheckpointMeta {
+    /// `graspmap.checkpoint/1`.
+    pub schema: String,
+    /// Settings of the run.
+    pub config: TrainConfig,
+    /// Epochs completed.
+    pub epoch: u32,
+    /// Every epoch so far.
+    pub history: Vec<EpochRecord>,
+    /// Best validation loss and its epoch.
+    pub best_val_loss: f64,
+    /// Epoch of the best validation loss.
+    pub best_epoch: u32,
+    /// Learning rate for the next epoch.
+    pub lr: f64,
+    /// LR schedule state.
+    pub plateau: Plateau,
+    /// Adam steps taken.
+    pub adam_steps: i64,
+    /// Indices (into the labelled images) used for training and validation.
+    pub train_indices: Vec<usize>,
+    /// Validation indices.
+    pub val_indices: Vec<usize>,
+}
+
+impl CheckpointMeta {
+    /// The schema name.
+    pub const SCHEMA: &'static str = "graspmap.checkpoint/1";
+}
+
+/// Writes weights (plus any extra tensors) with the training state inside, and its JSON copy.
+pub fn save_checkpoint(
+    vs: &nn::VarStore,
+    extra: &[(String, Tensor)],
+    meta: &CheckpointMeta,
+    dir: &Path,
+    name: &str,
+) -> anyhow::Result<()> {
+    let mut named: Vec<(String, Tensor)> = vs.variables().into_iter().collect();
+    named.extend(extra.iter().map(|(n, t)| (n.clone(), t.shallow_clone())));
+    write(named, meta, dir, name)
+}
+
+/// Reads a checkpoint's tensors and training state, with errors that name the file and the
+/// fix. The state comes from inside the weights file; a checkpoint from before it was embedded
+/// falls back to its JSON sidecar.
+pub fn read_checkpoint(
+    dir: &Path,
+    name: &str,
+) -> anyhow::Result<(BTreeMap<String, Tensor>, CheckpointMeta)> {
+    let (weights, sidecar) = checkpoint_paths(dir, name);
+    let decoded = read(&weights)?;
+    let sidecar_meta = || -> anyhow::Result<CheckpointMeta> {
+        let text = std::fs::read_to_string(&sidecar)
+            .with_context(|| format!("reading {}", sidecar.display()))?;
+        parse_meta(&text, &sidecar)
+    };
+    let meta = match decoded.meta {
+        Some(mut meta) => {
+            // The wall times live in the JSON copy only; take them when it is this epoch's.
+            if let Ok(copy) = sidecar_meta() {
+                if copy.epoch == meta.epoch && copy.history.len() == meta.history.len() {
+                    for (record, timed) in meta.history.iter_mut().zip(&copy.history) {
+                        record.seconds = timed.seconds;
+                    }
+                }
+            }
+            meta
+        }
+        None => sidecar_meta().with_context(|| {
+            format!(
+                "{} holds no training state; train from scratch",
+                weights.display()
+            )
+        })?,
+    };
+    Ok((decoded.tensors, meta))
+}
+
+/// Copies the model's weights out of a checkpoint's tensors.
+pub fn load_weights(
+    vs: &mut nn::VarStore,
+    tensors: &BTreeMap<String, Tensor>,
+    source: &Path,
+) -> anyhow::Result<()> {
+    for (name, mut var) in vs.variables() {
+        let saved = tensors
+            .get(&name)
+            .with_context(|| format!("{} has no tensor '{name}'", source.display()))?;
+        if saved.size() != var.size() {
+            bail!(
+                "{}: '{name}' has shape {:?}, the model needs {:?}",
+                source.display(),
+                saved.size(),
+                var.size()
+            );
+        }
+        tch::no_grad(|| var.copy_(&saved.to_kind(var.kind())));
+    }
+    Ok(())
+}
 
 /// The metadata key that holds the training state's JSON.
 pub const META_KEY: &str = "graspmap.checkpoint";
@@ -182,4 +304,71 @@ pub(crate) fn write(
     let mut text = serde_json::to_string_pretty(meta)?;
     text.push('\n');
     write_atomic(&sidecar, text.as_bytes())
+}
+
+#[cfg(test)]
+mod fuzz {
+    use std::path::Path;
+
+    use proptest::prelude::*;
+
+    use crate::data::fuzzing::{check, config, edits, mutate, text};
+
+    fn checkpoint_meta() -> crate::model::checkpoint::CheckpointMeta {
+        use crate::model::checkpoint::{CheckpointMeta, EpochRecord};
+        use crate::model::config::{Plateau, TrainConfig};
+        CheckpointMeta {
+            schema: CheckpointMeta::SCHEMA.to_owned(),
+            config: TrainConfig::default(),
+            epoch: 2,
+            history: vec![EpochRecord {
+                epoch: 1,
+                train_loss: 0.5,
+                val_loss: 0.25,
+                lr: 1e-3,
+                seconds: 1.5,
+            }],
+            best_val_loss: 0.25,
+            best_epoch: 1,
+            lr: 1e-3,
+            plateau: Plateau::default(),
+            adam_steps: 16,
+            train_indices: vec![0, 2, 3],
+            val_indices: vec![1],
+        }
+    }
+
+    fn small_safetensors() -> &'static [u8] {
+        static BYTES: std::sync::LazyLock<Vec<u8>> = std::sync::LazyLock::new(|| {
+            let tensors = vec![
+                (
+                    "inc.0.bias".to_owned(),
+                    tch::Tensor::from_slice(&[0.5f32, -1.0, 2.0]),
+                ),
+                (
+                    "outc.weight".to_owned(),
+                    tch::Tensor::from_slice(&[1.0f32, 2.0, 3.0, 4.0]).view([1, 4, 1, 1]),
+                ),
+            ];
+            crate::model::checkpoint::encode(&tensors, &checkpoint_meta()).unwrap()
+        });
+        &BYTES
+    }
+
+    proptest! {
+        #![proptest_config(config())]
+
+        #[test]
+        fn fuzz_json_checkpoint_state(edits in edits()) {
+            let seed = serde_json::to_string_pretty(&checkpoint_meta()).unwrap();
+            let input = text(&mutate(seed.as_bytes(), &edits));
+            check(|| crate::model::checkpoint::parse_meta(&input, Path::new("last.json")))?;
+        }
+
+        #[test]
+        fn fuzz_safetensors(edits in edits()) {
+            let input = mutate(small_safetensors(), &edits);
+            check(|| crate::model::checkpoint::decode(&input, Path::new("last.safetensors")))?;
+        }
+    }
 }

@@ -6,10 +6,18 @@ use anyhow::bail;
 use tch::{nn, Device, Kind, Tensor};
 
 use crate::data::dataset::write_chw;
-use crate::data::input::{InputKind, NetInput};
+use crate::data::input::{rotated_inputs, InputKind, NetInput};
 use crate::grasp::BINS;
+use crate::model::maps::AffordanceMaps;
 use crate::model::unet::{MiniUNet, Precision};
-use crate::policy::affordance::AffordanceMaps;
+
+/// The network's answer for one observation, with the [`BINS`] rotated views its maps score.
+pub(crate) struct Scored {
+    /// The observation's RGB rotated by −b · 22.5° for each bin b.
+    pub(crate) rotated: Vec<image::RgbImage>,
+    /// One affordance map per rotation.
+    pub(crate) maps: AffordanceMaps,
+}
 
 /// A MiniUNet with its weights, ready to predict.
 pub(crate) struct AffordanceModel {
@@ -38,7 +46,7 @@ impl AffordanceModel {
             .map_or(InputKind::Rgb, |meta| meta.config.input);
         let mut weights = nn::VarStore::new(Device::Cpu);
         let net = MiniUNet::with_input(&weights.root(), input);
-        super::train::load_weights(&mut weights, &decoded.tensors, path)?;
+        super::checkpoint::load_weights(&mut weights, &decoded.tensors, path)?;
         Ok(Self {
             _weights: weights,
             net,
@@ -51,6 +59,15 @@ impl AffordanceModel {
     /// The input the model takes, as its checkpoint records it.
     pub(crate) fn input(&self) -> InputKind {
         self.input
+    }
+
+    /// Scores one observation: rotates it to each of the [`BINS`] angles and runs the batch.
+    /// The one scoring step of `predict` and the model policy.
+    pub(crate) fn score(&self, input: &NetInput) -> anyhow::Result<Scored> {
+        let rotated_input = rotated_inputs(input);
+        let maps = self.predict(&rotated_input)?;
+        let rotated = rotated_input.into_iter().map(|r| r.rgb).collect();
+        Ok(Scored { rotated, maps })
     }
 
     /// Affordance (sigmoid of the logits) for the [`BINS`] rotated observations, one batch.
@@ -78,8 +95,9 @@ impl AffordanceModel {
         let values = tch::no_grad(|| {
             let batch =
                 Tensor::from_slice(&input).view([BINS as i64, channels as i64, h as i64, w as i64]);
-            // oneDNN's fp32 convolutions run a fifth faster in channels_last (BENCHMARKS.md,
-            // "Training"); only for inference, since its backward pass is slower there.
+            // oneDNN's fp32 convolutions run a fifth faster in channels_last
+            // (BENCHMARKS.md#rust-against-pytorch); only for inference, since its backward pass
+            // is slower there.
             let batch = match self.precision {
                 Precision::Fp32 => crate::model::unet::channels_last(&batch),
                 Precision::Bf16 => batch,
@@ -99,7 +117,8 @@ impl AffordanceModel {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::train::{save_checkpoint, CheckpointMeta, Plateau, TrainConfig};
+    use crate::model::checkpoint::{save_checkpoint, CheckpointMeta};
+    use crate::model::config::{Plateau, TrainConfig};
 
     /// A freshly initialised checkpoint of `input` saved as `dir/best.safetensors`.
     fn saved(dir: &Path, input: InputKind) -> std::path::PathBuf {

@@ -4,7 +4,9 @@
 //! docs/learning.md describes the network and its training.
 
 pub mod checkpoint;
+pub mod config;
 pub(crate) mod inference;
+pub(crate) mod maps;
 pub mod train;
 pub mod unet;
 

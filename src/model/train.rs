@@ -6,60 +6,18 @@
 
 use std::collections::BTreeMap;
 use std::ops::ControlFlow;
-use std::path::Path;
 
 use anyhow::{bail, Context};
 use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
-use serde::{Deserialize, Serialize};
 use tch::nn;
 use tch::{Device, Kind, Reduction, Tensor};
 
-use super::checkpoint;
+use super::config::TrainConfig;
 use crate::data::augment::AugmentConfig;
 use crate::data::dataset::{training_sample, LabelledImage, Sample};
-use crate::data::input::InputKind;
 use crate::model::unet::{MiniUNet, Precision};
-
-/// Training settings (the reference's defaults).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct TrainConfig {
-    /// Epochs to run (101).
-    pub(crate) epochs: u32,
-    /// Images per optimiser step (8).
-    pub(crate) batch_size: usize,
-    /// Initial Adam learning rate (1e-3).
-    pub(crate) lr: f64,
-    /// Seed of the split, the initial weights, the data order and the augmentation.
-    pub(crate) seed: u64,
-    /// Multiply the LR by this after `patience` epochs without validation improvement (0.1).
-    pub(crate) lr_factor: f64,
-    /// Epochs without improvement before the LR drops (3).
-    pub(crate) patience: u32,
-    /// Arithmetic of the forward and backward passes.
-    pub precision: Precision,
-    /// What the network sees (`--input`). Left out of the JSON when rgb, so rgb checkpoints keep
-    /// the bytes they had before the option existed, and older checkpoints read as rgb.
-    #[serde(default, skip_serializing_if = "InputKind::is_rgb")]
-    pub input: InputKind,
-}
-
-impl Default for TrainConfig {
-    fn default() -> Self {
-        Self {
-            epochs: 101,
-            batch_size: 8,
-            lr: 1e-3,
-            seed: 0,
-            lr_factor: 0.1,
-            patience: 3,
-            precision: Precision::Fp32,
-            input: InputKind::Rgb,
-        }
-    }
-}
 
 /// Adam (β 0.9/0.999, ε 1e-8, no weight decay), PyTorch's update rule.
 pub(crate) struct Adam {
@@ -170,156 +128,6 @@ impl Adam {
         self.step = steps;
         Ok(())
     }
-}
-
-/// ReduceLROnPlateau in PyTorch's default mode: relative threshold 1e-4.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Plateau {
-    /// Best validation loss so far (none before the first epoch).
-    pub(crate) best: Option<f64>,
-    /// Epochs since it improved.
-    pub(crate) bad_epochs: u32,
-}
-
-impl Plateau {
-    /// Feeds one epoch's validation loss; returns the new learning rate.
-    pub(crate) fn update(&mut self, loss: f64, lr: f64, config: &TrainConfig) -> f64 {
-        if self.best.is_none_or(|best| loss < best * (1.0 - 1e-4)) {
-            self.best = Some(loss);
-            self.bad_epochs = 0;
-            lr
-        } else {
-            self.bad_epochs += 1;
-            if self.bad_epochs > config.patience {
-                self.bad_epochs = 0;
-                lr * config.lr_factor
-            } else {
-                lr
-            }
-        }
-    }
-}
-
-/// One epoch's record.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct EpochRecord {
-    /// 1-based epoch.
-    pub epoch: u32,
-    /// Mean training loss (BCE with logits).
-    pub train_loss: f64,
-    /// Mean validation loss.
-    pub val_loss: f64,
-    /// Learning rate used in the epoch.
-    pub lr: f64,
-    /// Wall seconds of the epoch.
-    pub(crate) seconds: f64,
-}
-
-/// The JSON sidecar of a checkpoint.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct CheckpointMeta {
-    /// `graspmap.checkpoint/1`.
-    pub schema: String,
-    /// Settings of the run.
-    pub config: TrainConfig,
-    /// Epochs completed.
-    pub epoch: u32,
-    /// Every epoch so far.
-    pub history: Vec<EpochRecord>,
-    /// Best validation loss and its epoch.
-    pub best_val_loss: f64,
-    /// Epoch of the best validation loss.
-    pub best_epoch: u32,
-    /// Learning rate for the next epoch.
-    pub lr: f64,
-    /// LR schedule state.
-    pub plateau: Plateau,
-    /// Adam steps taken.
-    pub adam_steps: i64,
-    /// Indices (into the labelled images) used for training and validation.
-    pub train_indices: Vec<usize>,
-    /// Validation indices.
-    pub val_indices: Vec<usize>,
-}
-
-impl CheckpointMeta {
-    /// The schema name.
-    pub const SCHEMA: &'static str = "graspmap.checkpoint/1";
-}
-
-/// Writes weights (plus any extra tensors) with the training state inside, and its JSON copy.
-pub fn save_checkpoint(
-    vs: &nn::VarStore,
-    extra: &[(String, Tensor)],
-    meta: &CheckpointMeta,
-    dir: &Path,
-    name: &str,
-) -> anyhow::Result<()> {
-    let mut named: Vec<(String, Tensor)> = vs.variables().into_iter().collect();
-    named.extend(extra.iter().map(|(n, t)| (n.clone(), t.shallow_clone())));
-    checkpoint::write(named, meta, dir, name)
-}
-
-/// Reads a checkpoint's tensors and training state, with errors that name the file and the
-/// fix. The state comes from inside the weights file; a checkpoint from before it was embedded
-/// falls back to its JSON sidecar.
-pub fn read_checkpoint(
-    dir: &Path,
-    name: &str,
-) -> anyhow::Result<(BTreeMap<String, Tensor>, CheckpointMeta)> {
-    let (weights, sidecar) = checkpoint::checkpoint_paths(dir, name);
-    let decoded = checkpoint::read(&weights)?;
-    let sidecar_meta = || -> anyhow::Result<CheckpointMeta> {
-        let text = std::fs::read_to_string(&sidecar)
-            .with_context(|| format!("reading {}", sidecar.display()))?;
-        checkpoint::parse_meta(&text, &sidecar)
-    };
-    let meta = match decoded.meta {
-        Some(mut meta) => {
-            // The wall times live in the JSON copy only; take them when it is this epoch's.
-            if let Ok(copy) = sidecar_meta() {
-                if copy.epoch == meta.epoch && copy.history.len() == meta.history.len() {
-                    for (record, timed) in meta.history.iter_mut().zip(&copy.history) {
-                        record.seconds = timed.seconds;
-                    }
-                }
-            }
-            meta
-        }
-        None => sidecar_meta().with_context(|| {
-            format!(
-                "{} holds no training state; train from scratch",
-                weights.display()
-            )
-        })?,
-    };
-    Ok((decoded.tensors, meta))
-}
-
-/// Copies the model's weights out of a checkpoint's tensors.
-pub fn load_weights(
-    vs: &mut nn::VarStore,
-    tensors: &BTreeMap<String, Tensor>,
-    source: &Path,
-) -> anyhow::Result<()> {
-    for (name, mut var) in vs.variables() {
-        let saved = tensors
-            .get(&name)
-            .with_context(|| format!("{} has no tensor '{name}'", source.display()))?;
-        if saved.size() != var.size() {
-            bail!(
-                "{}: '{name}' has shape {:?}, the model needs {:?}",
-                source.display(),
-                saved.size(),
-                var.size()
-            );
-        }
-        tch::no_grad(|| var.copy_(&saved.to_kind(var.kind())));
-    }
-    Ok(())
 }
 
 /// Stacks samples into an input batch N×C×H×W (C = 3, or 4 for rgbd) and a target batch
@@ -478,22 +286,6 @@ mod tests {
         };
         let diff = (run(true) - run(false)).abs().max().double_value(&[]);
         assert!(diff < 1e-6, "max difference {diff}");
-    }
-
-    #[test]
-    fn plateau_drops_the_rate_after_patience_epochs_without_improvement() {
-        let config = TrainConfig::default();
-        let mut plateau = Plateau::default();
-        let mut lr = 1e-3;
-        let mut rates = Vec::new();
-        for loss in [1.0, 0.9, 0.95, 0.95, 0.95, 0.95, 0.95, 0.8] {
-            lr = plateau.update(loss, lr, &config);
-            rates.push(lr);
-        }
-        // Three bad epochs are tolerated; the fourth cuts the rate tenfold.
-        assert_eq!(rates[..5], [1e-3; 5]);
-        assert!((rates[5] - 1e-4).abs() < 1e-12, "{rates:?}");
-        assert!((rates[7] - 1e-4).abs() < 1e-12, "{rates:?}");
     }
 
     #[test]

@@ -8,16 +8,18 @@ use tch::nn::{self, Module};
 use tch::{Kind, Tensor};
 
 use crate::data::input::InputKind;
+use crate::named::named_enum;
 
-/// Arithmetic the forward pass runs in.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum Precision {
-    /// Plain float32.
-    Fp32,
-    /// bfloat16 convolutions in channels_last layout over float32 master weights; the logits
-    /// come back as float32 for the loss.
-    Bf16,
+named_enum! {
+    /// Arithmetic the forward pass runs in.
+    #[derive(serde::Deserialize)]
+    pub enum Precision {
+        /// Plain float32.
+        Fp32 = "fp32", "plain float32",
+        /// bfloat16 convolutions in channels_last layout over float32 master weights; the logits
+        /// come back as float32 for the loss.
+        Bf16 = "bf16", "bfloat16 convolutions over float32 master weights",
+    }
 }
 
 /// The parameter names of the reference module, in its state_dict order.
@@ -129,14 +131,6 @@ impl Precision {
         }
         Precision::Fp32
     }
-
-    /// As the command line and the reports spell it.
-    pub(crate) fn name(self) -> &'static str {
-        match self {
-            Precision::Fp32 => "fp32",
-            Precision::Bf16 => "bf16",
-        }
-    }
 }
 
 /// Channels-last layout: tch has no memory-format API, so permute, copy, permute back.
@@ -158,36 +152,41 @@ fn up_bf16(x: &Tensor, up: &nn::ConvTranspose2D) -> Tensor {
 }
 
 impl MiniUNet {
-    /// Logits, N×1×H×W float32, computed in `precision`.
+    /// Logits, N×1×H×W float32, for an N×C×H×W input in [0, 1] (H and W divisible by 4),
+    /// computed in `precision`: one graph, whose layers run as float32 modules or as bfloat16
+    /// convolutions in channels_last.
     pub(crate) fn forward_with(&self, xs: &Tensor, precision: Precision) -> Tensor {
+        let conv = |x: &Tensor, layer: &nn::Conv2D| match precision {
+            Precision::Fp32 => x.apply(layer),
+            Precision::Bf16 => conv_bf16(x, layer),
+        };
+        let up = |x: &Tensor, layer: &nn::ConvTranspose2D| match precision {
+            Precision::Fp32 => x.apply(layer),
+            Precision::Bf16 => up_bf16(x, layer),
+        };
+        let x = match precision {
+            Precision::Fp32 => xs.shallow_clone(),
+            Precision::Bf16 => channels_last(&xs.to_kind(Kind::BFloat16)),
+        }; // N×C×H×W
+        let x1 = conv(&x, &self.inc).relu(); // N×64×H×W
+        let x2 = conv(&x1.max_pool2d_default(2), &self.down1).relu(); // N×128×H/2×W/2
+        let x3 = conv(&x2.max_pool2d_default(2), &self.down2).relu(); // N×256×H/4×W/4
+        let u1 = up(&x3, &self.upconv1); // N×128×H/2×W/2
+        let y1 = conv(&Tensor::cat(&[&u1, &x2], 1), &self.conv1).relu(); // N×128×H/2×W/2
+        let u2 = up(&y1, &self.upconv2); // N×64×H×W
+        let y2 = conv(&Tensor::cat(&[&u2, &x1], 1), &self.conv2).relu(); // N×64×H×W
+        let logits = conv(&y2, &self.outc); // N×1×H×W
         match precision {
-            Precision::Fp32 => self.forward(xs),
-            Precision::Bf16 => {
-                let x = channels_last(&xs.to_kind(Kind::BFloat16)); // N×3×H×W
-                let x1 = conv_bf16(&x, &self.inc).relu(); // N×64×H×W
-                let x2 = conv_bf16(&x1.max_pool2d_default(2), &self.down1).relu(); // N×128×H/2×W/2
-                let x3 = conv_bf16(&x2.max_pool2d_default(2), &self.down2).relu(); // N×256×H/4×W/4
-                let u1 = up_bf16(&x3, &self.upconv1); // N×128×H/2×W/2
-                let y1 = conv_bf16(&Tensor::cat(&[&u1, &x2], 1), &self.conv1).relu(); // N×128×H/2×W/2
-                let u2 = up_bf16(&y1, &self.upconv2); // N×64×H×W
-                let y2 = conv_bf16(&Tensor::cat(&[&u2, &x1], 1), &self.conv2).relu(); // N×64×H×W
-                conv_bf16(&y2, &self.outc).to_kind(Kind::Float) // N×1×H×W
-            }
+            Precision::Fp32 => logits,
+            Precision::Bf16 => logits.to_kind(Kind::Float),
         }
     }
 }
 
 impl Module for MiniUNet {
-    /// Logits, N×1×H×W, for an N×3×H×W input in [0, 1]; H and W divisible by 4.
+    /// Logits, N×1×H×W, in float32.
     fn forward(&self, xs: &Tensor) -> Tensor {
-        let x1 = xs.apply(&self.inc).relu(); // N×64×H×W
-        let x2 = x1.max_pool2d_default(2).apply(&self.down1).relu(); // N×128×H/2×W/2
-        let x3 = x2.max_pool2d_default(2).apply(&self.down2).relu(); // N×256×H/4×W/4
-        let u1 = x3.apply(&self.upconv1); // N×128×H/2×W/2
-        let y1 = Tensor::cat(&[&u1, &x2], 1).apply(&self.conv1).relu(); // N×128×H/2×W/2
-        let u2 = y1.apply(&self.upconv2); // N×64×H×W
-        let y2 = Tensor::cat(&[&u2, &x1], 1).apply(&self.conv2).relu(); // N×64×H×W
-        y2.apply(&self.outc) // N×1×H×W
+        self.forward_with(xs, Precision::Fp32)
     }
 }
 

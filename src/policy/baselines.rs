@@ -7,9 +7,10 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rapier3d::math::Vector;
 
-use super::affordance::Suppression;
-use super::oracle::{self, OracleConfig, OracleError};
-use super::{Decision, Observation, Policy};
+use super::oracle;
+use super::suppression::Suppression;
+use super::verify::CheckConfig;
+use super::{Decision, NoGrasp, Observation, Policy};
 use crate::grasp::tote::PICK_TOTE;
 use crate::grasp::{normalize_angle, PixelGrasp};
 use crate::vision::camera::Camera;
@@ -56,10 +57,11 @@ pub(crate) struct OraclePolicy;
 
 impl Policy for OraclePolicy {
     fn decide(&self, view: &Observation, memory: &Suppression) -> Decision {
-        let mut grasp = Err(OracleError::NothingInBin);
+        let mut grasp = Err(NoGrasp::NothingInBin);
         for id in least_tried_first(view.frame, topmost_first(view.frame, view.in_bin), memory) {
-            grasp = oracle::plan(view.camera, view.frame, id, &OracleConfig::default())
-                .map(|plan| plan.grasp);
+            grasp = oracle::plan(view.camera, view.frame, id, &CheckConfig::default())
+                .map(|plan| plan.grasp)
+                .map_err(NoGrasp::from);
             if grasp.is_ok() {
                 break;
             }
@@ -70,7 +72,7 @@ impl Policy for OraclePolicy {
 
 /// How far from a remembered grasp's centre (pixels, each way) an object counts as tried: a
 /// grasp that closes on air often nudges the object it missed off its centre pixel. 2 px (about
-/// 2 cm) moved more than 0 or 4 (BENCHMARKS.md, "Stop 17").
+/// 2 cm) moved more than 0 or 4 (BENCHMARKS.md#oracle-yardstick-in-clutter).
 const TRIED_REACH_PX: u32 = 2;
 
 /// `ids` reordered by how many remembered grasps land on or next to each in `frame`, fewest
@@ -114,7 +116,7 @@ fn topmost_first(frame: &Frame, ids: &[u16]) -> Vec<u16> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::policy::affordance::SuppressionConfig;
+    use crate::policy::suppression::SuppressionConfig;
 
     /// A frame whose mask holds three objects in columns 10–20, 60–70 and 100–110.
     fn three_objects() -> Frame {

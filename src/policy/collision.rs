@@ -9,6 +9,8 @@
 
 use rapier3d::math::Vector;
 
+use super::heights::HeightMap;
+
 use crate::grasp::gripper::GripperGeometry;
 use crate::grasp::rotate::rotate_point;
 use crate::grasp::tote::Tote;
@@ -118,40 +120,6 @@ pub(crate) const LANDING_TOLERANCE: f32 = 0.005;
 /// the pads can only close on the edge of whatever lies beside it (m).
 pub(crate) const ON_OBJECT_HEIGHT: f32 = 0.005;
 
-/// World height of the surface seen at each pixel.
-pub(crate) struct HeightMap {
-    size: u32,
-    heights: Vec<f32>,
-}
-
-impl HeightMap {
-    /// Back-projects the frame's depth.
-    pub(crate) fn new(camera: &Camera, frame: &Frame) -> Self {
-        let mut heights = Vec::with_capacity((frame.width * frame.height) as usize);
-        for v in 0..frame.height {
-            for u in 0..frame.width {
-                heights.push(camera.pixel_to_world(u, v, frame.depth_at(u, v)).z);
-            }
-        }
-        Self {
-            size: frame.width,
-            heights,
-        }
-    }
-
-    /// The surface height seen at pixel (`u`, `v`).
-    pub(crate) fn at(&self, u: u32, v: u32) -> f32 {
-        self.heights[(v * self.size + u) as usize]
-    }
-
-    /// The surface height seen where `p` projects; `None` outside the image.
-    fn under(&self, camera: &Camera, p: Vector) -> Option<f32> {
-        let [u, v, _] = camera.project(p)?;
-        let inside = |c: f32| (0.0..self.size as f32).contains(&c);
-        (inside(u) && inside(v)).then(|| self.heights[(v as u32 * self.size + u as u32) as usize])
-    }
-}
-
 /// True when, lowered to the grasp, neither finger nor the palm would come down on a surface
 /// the camera sees: under each finger's footprint nothing rises above the TCP (plus
 /// [`LANDING_TOLERANCE`]), under the palm nothing above its lower face.
@@ -198,15 +166,16 @@ pub(crate) fn lands_clear(
 /// For each bin and rotated pixel, whether the grasp it stands for is allowed: its original
 /// pixel lies in the image (not in the black fill of the rotation) and it passes `check`
 /// (for `Full`: the walls, [`lands_clear`], and a centre above [`ON_OBJECT_HEIGHT`]).
-/// Same layout as [`crate::policy::affordance::AffordanceMaps`].
+/// Same layout as [`crate::model::maps::AffordanceMaps`].
 pub(crate) fn allowed_actions(
     camera: &Camera,
     frame: &Frame,
+    heights: &HeightMap,
     tote: &Tote,
     gripper: &GripperVolume,
     check: CollisionCheck,
 ) -> Vec<bool> {
-    let heights = (check == CollisionCheck::Full).then(|| HeightMap::new(camera, frame));
+    let full = check == CollisionCheck::Full;
     let size = frame.width;
     debug_assert_eq!(frame.width, frame.height);
     let mut allowed = Vec::with_capacity(BINS * (size * size) as usize);
@@ -222,7 +191,15 @@ pub(crate) fn allowed_actions(
                             v: y as u32,
                             angle_deg: bin_angle(bin),
                         };
-                        grasp_allowed(camera, frame, heights.as_ref(), tote, gripper, check, grasp)
+                        grasp_allowed(
+                            camera,
+                            frame,
+                            full.then_some(heights),
+                            tote,
+                            gripper,
+                            check,
+                            grasp,
+                        )
                     },
                 );
             }
@@ -468,7 +445,14 @@ mod tests {
         let camera = Camera::top_down();
         let gripper = GripperVolume::from(&GRIPPER);
         let allowed = |frame: &Frame| {
-            allowed_actions(&camera, frame, &PICK_TOTE, &gripper, CollisionCheck::Full)
+            allowed_actions(
+                &camera,
+                frame,
+                &HeightMap::new(&camera, frame),
+                &PICK_TOTE,
+                &gripper,
+                CollisionCheck::Full,
+            )
         };
         assert!(!allowed(&floor_frame(&camera, None)).iter().any(|&a| a));
         // A 3 × 3 px (about 26 mm) block fits between the pads at every angle.
@@ -493,6 +477,7 @@ mod tests {
         let allowed = allowed_actions(
             &camera,
             &frame,
+            &HeightMap::new(&camera, &frame),
             &PICK_TOTE,
             &GripperVolume::from(&GRIPPER),
             CollisionCheck::Walls,

@@ -5,19 +5,47 @@
 //! object mask) and answers with a pixel grasp. It may use the pure core and `model`, never the
 //! simulator: commands wire the two together. docs/evaluation.md describes each check.
 
-pub(crate) mod affordance;
 pub(crate) mod baselines;
 pub(crate) mod collision;
+pub mod heights;
 pub(crate) mod model;
 pub mod oracle;
+pub(crate) mod suppression;
+pub mod verify;
 
 use image::RgbImage;
 
 use crate::grasp::PixelGrasp;
+use crate::model::maps::Choice;
+use crate::named::named_enum;
 use crate::vision::camera::Camera;
 use crate::vision::render::Frame;
-use affordance::{Choice, Suppression};
 use oracle::OracleError;
+use suppression::Suppression;
+
+named_enum! {
+    /// Who chooses the grasps.
+    #[derive(serde::Deserialize)]
+    pub enum PolicyKind {
+        /// The trained affordance model.
+        Model = "model", "the trained affordance model (argmax over 8 rotations)",
+        /// A random point of bin 1's floor and a random angle.
+        Random = "random", "a uniformly random point of bin 1's floor and a random angle",
+        /// The planner, from ground-truth masks and depth.
+        Oracle = "oracle", "the workcell's planner, from ground-truth masks and depth",
+    }
+}
+
+/// Why a policy has no grasp to offer (only the oracle can fail: it plans on ground truth).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub(crate) enum NoGrasp {
+    /// None of the objects in the bin is visible, so there is nothing to plan on.
+    #[error("no object is visible in bin 1")]
+    NothingInBin,
+    /// The planner found no grasp on any visible object (the last one's reasons).
+    #[error(transparent)]
+    Planner(#[from] OracleError),
+}
 
 /// What a policy sees before one attempt.
 pub(crate) struct Observation<'a> {
@@ -36,7 +64,7 @@ pub(crate) struct Observation<'a> {
 /// A policy's answer for one observation.
 pub(crate) struct Decision {
     /// The grasp to execute, or why there is none.
-    pub(crate) grasp: Result<PixelGrasp, OracleError>,
+    pub(crate) grasp: Result<PixelGrasp, NoGrasp>,
     /// The network's action behind the grasp (model policy).
     pub(crate) choice: Option<Choice>,
     /// The maps the choice came from, drawn as the reference's grid (model policy).
@@ -47,7 +75,7 @@ pub(crate) struct Decision {
 
 impl Decision {
     /// A decision that only names a grasp (or why there is none).
-    pub(crate) fn grasp_only(grasp: Result<PixelGrasp, OracleError>) -> Self {
+    pub(crate) fn grasp_only(grasp: Result<PixelGrasp, NoGrasp>) -> Self {
         Self {
             grasp,
             choice: None,

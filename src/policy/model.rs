@@ -1,31 +1,36 @@
-//! The model policy: the network's 8 rotated maps, the collision check, failure suppression,
-//! the depth test and centring, in that order, then the argmax.
+//! The model policy, in the order it runs: the network's 8 rotated maps; failure suppression
+//! lowers them around past failures; the collision check zeroes grasps that would collide; the
+//! argmax; verification replaces it with the best of the top candidates that passes the depth
+//! image test (or, when none does, of the best candidates before the collision check); centring
+//! moves the chosen grasp to the middle of its surface (docs/evaluation.md).
 
 use std::time::Instant;
 
-use super::affordance::{visualisation, Choice, Suppression};
-use super::collision::{allowed_actions, CollisionCheck, GraspSite, GripperVolume, HeightMap};
-use super::oracle::{DepthCheck, OracleConfig};
+use super::collision::{allowed_actions, CollisionCheck, GraspSite, GripperVolume};
+use super::heights::HeightMap;
+use super::suppression::Suppression;
+use super::verify::{CheckConfig, Verifier};
 use super::{Decision, Observation, Policy};
-use crate::data::input::{rotated_inputs, InputKind, NetInput};
+use crate::data::input::{InputKind, NetInput};
 use crate::grasp::gripper::GRIPPER;
 use crate::grasp::tote::PICK_TOTE;
 use crate::grasp::PixelGrasp;
-use crate::model::inference::AffordanceModel;
+use crate::model::inference::{AffordanceModel, Scored};
+use crate::model::maps::{visualisation, Choice};
 
 /// How the model policy checks the network's candidates (docs/evaluation.md).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub(crate) struct ModelPolicyConfig {
     /// Which grasps are zeroed before the argmax. Default `Full`.
     pub(crate) check: CollisionCheck,
-    /// How many of the best actions the depth test may look at; 0 executes the argmax as it
+    /// How many of the best actions verification may look at; 0 executes the argmax as it
     /// is. Default 200.
     pub(crate) verify_top: usize,
-    /// The depth test replaces the argmax only with a candidate scoring at least this fraction
+    /// Verification replaces the argmax only with a candidate scoring at least this fraction
     /// of it; 0 (the default) lets any candidate in the N best replace it.
     pub(crate) verify_floor: f32,
     /// When none of the `verify_top` best allowed actions passes, how many of the best before
-    /// the collision check the depth test looks at next; 0 skips that second pass. Default 200.
+    /// the collision check verification looks at next; 0 skips that second pass. Default 200.
     pub(crate) verify_rejected: usize,
     /// Move the chosen grasp to the middle of its surface (needs `check` `Full`). Default off.
     pub(crate) centring: bool,
@@ -52,14 +57,14 @@ pub(crate) enum ConfigError {
         /// The check asked for.
         check: CollisionCheck,
     },
-    /// The second pass belongs to the depth test, so it needs the test on.
-    #[error("--verify-rejected {count} widens the depth test, which --verify-top 0 turns off; give --verify-top N with N > 0, or drop --verify-rejected")]
+    /// The second pass belongs to verification, so it needs verification on.
+    #[error("--verify-rejected {count} widens verification, which --verify-top 0 turns off; give --verify-top N with N > 0, or drop --verify-rejected")]
     RejectedWithoutDepthTest {
         /// The count asked for.
         count: usize,
     },
-    /// The floor only narrows the depth test's candidates, so it needs the test on.
-    #[error("--verify-floor {floor} narrows the depth test, which --verify-top 0 turns off; give --verify-top N with N > 0, or drop --verify-floor")]
+    /// The floor only narrows the candidates of verification, so it needs verification on.
+    #[error("--verify-floor {floor} narrows verification, which --verify-top 0 turns off; give --verify-top N with N > 0, or drop --verify-floor")]
     FloorWithoutDepthTest {
         /// The floor asked for.
         floor: f32,
@@ -119,32 +124,34 @@ impl Policy for ModelPolicy {
         let kind = self.model.input();
         let depth = (kind == InputKind::Rgbd).then(|| frame.to_depth_image_mm());
         let input = NetInput::new(kind, view.rgb.clone(), depth.as_ref());
-        let rotated_input = rotated_inputs(&input);
-        let mut maps = self
+        let Scored { rotated, mut maps } = self
             .model
-            .predict(&rotated_input)
+            .score(&input)
             .expect("the policy builds the input its model was trained on");
-        let rotated: Vec<_> = rotated_input.into_iter().map(|r| r.rgb).collect();
         let gripper = GripperVolume::from(&GRIPPER);
+        // One back-projection of the frame serves the collision check, verification and
+        // centring.
+        let heights = HeightMap::new(camera, frame);
         // Suppression only lowers and clips to [0, 1], so it gives the same maps before the
         // collision check's zeroing as after; applied first, the second pass's copy shares it.
         memory.apply(&mut maps);
         let second_pass = verify_top > 0 && verify_rejected > 0 && check != CollisionCheck::Off;
         let unchecked = second_pass.then(|| maps.clone());
         if check != CollisionCheck::Off {
-            maps.restrict(&allowed_actions(camera, frame, &PICK_TOTE, &gripper, check));
+            let allowed = allowed_actions(camera, frame, &heights, &PICK_TOTE, &gripper, check);
+            maps.restrict(&allowed);
         }
         let mut choice = maps.choose();
         if verify_top > 0 {
-            // The network ranks, the planner's depth test vetoes: in clutter its peak often
-            // sits on a box's edge or corner, where the pads squeeze the box out, or across a
-            // side wider than the jaw leaves room for. When none of the allowed best passes, the
-            // test looks at the best that the collision check zeroed: in clutter, a grasp that
-            // passes there works more often than the allowed argmax that failed the test
-            // (BENCHMARKS.md, "Stop 17"). When nothing passes (or nothing above the floor), the
-            // argmax is still tried (BENCHMARKS.md, "Depth test").
-            let test = DepthCheck::new(camera, frame, OracleConfig::default());
-            let passes = |g: PixelGrasp| test.assess(g).is_ok();
+            // The network ranks, verification vetoes: in clutter its peak often sits on a
+            // box's edge or corner, where the pads squeeze the box out, or across a side wider
+            // than the jaw leaves room for. When none of the allowed best passes, it looks at
+            // the best that the collision check zeroed: in clutter, a grasp that passes there
+            // works more often than the allowed argmax that failed. When nothing passes (or
+            // nothing above the floor), the argmax is still tried
+            // (BENCHMARKS.md#verification).
+            let verifier = Verifier::new(camera, frame, &heights, CheckConfig::default());
+            let passes = |g: PixelGrasp| verifier.assess(g).is_ok();
             let passed =
                 first_verified(maps.ranked(verify_top), verify_floor, passes).or_else(|| {
                     let unchecked = unchecked.as_ref()?;
@@ -155,9 +162,8 @@ impl Policy for ModelPolicy {
             }
         }
         if centring {
-            let heights = HeightMap::new(camera, frame);
             // A grasp that fits only at a corner is still executed: refusing it and taking
-            // the next best did worse (BENCHMARKS.md, "Centring").
+            // the next best did worse (BENCHMARKS.md#centring).
             let site = GraspSite {
                 camera,
                 frame,
@@ -184,7 +190,7 @@ impl Policy for ModelPolicy {
 /// the best. Alone in the bin, an object the test finds too wide for the jaw (a 75 mm can,
 /// with the test's 6 mm to spare on each side) leaves only its edges to pass, where the network
 /// scores a few per cent of its peak and the pads close on air; the floor keeps the peak instead
-/// (BENCHMARKS.md, "Stop 16").
+/// (BENCHMARKS.md#verification).
 fn first_verified(
     ranked: Vec<Choice>,
     floor: f32,

@@ -6,104 +6,14 @@
 
 use rapier3d::math::Vector;
 
-use crate::grasp::gripper::GRIPPER;
-use crate::grasp::{world_grasp, PixelGrasp, WorldGrasp};
+use super::heights::HeightMap;
+use super::verify::{
+    check_grasp, Assessment, CheckConfig, Cloud, Rejection, ASYMMETRY_WEIGHT, CLEARANCE_THAT_COUNTS,
+};
+use crate::grasp::PixelGrasp;
+use crate::named::Named;
 use crate::vision::camera::Camera;
 use crate::vision::render::Frame;
-
-/// Geometry of the jaw the planner plans for (defaults: the workcell's gripper) and how finely it searches.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct OracleConfig {
-    /// Distance between the open pads' inner faces (m).
-    pub(crate) opening: f32,
-    /// Pad width across the closing line (m).
-    pub(crate) pad_width: f32,
-    /// Pad thickness along the closing line (m).
-    pub(crate) pad_thickness: f32,
-    /// Pad height along the tool axis (m).
-    pub(crate) pad_height: f32,
-    /// Height of the palm's lower face above the TCP (m).
-    pub(crate) palm_height: f32,
-    /// Palm half extents along and across the closing line (m).
-    pub(crate) palm_half_along: f32,
-    /// Palm half extent across the closing line (m).
-    pub(crate) palm_half_across: f32,
-    /// Safety margin around the pads and inside the opening (m).
-    pub(crate) margin: f32,
-    /// Largest shift of the squeezed outline across a pad's width (m); more is a slanted face.
-    pub(crate) max_slant: f32,
-    /// Number of angles tried over 180°.
-    pub(crate) angles: u32,
-    /// Sampling step along and across the closing line (m).
-    pub(crate) step: f32,
-}
-
-/// Clearance the planner keeps around the pads and inside the opening (m).
-pub(crate) const PLANNING_MARGIN: f32 = 0.006;
-/// Largest shift of the squeezed outline across a pad before a face counts as slanted (m).
-pub(crate) const MAX_SLANT: f32 = 0.010;
-/// Free space under the pads beyond this no longer raises a plan's score (m).
-pub(crate) const CLEARANCE_THAT_COUNTS: f32 = 0.02;
-/// Weight of an off-centre squeeze in a plan's score, against clearance and the distance to
-/// the object's centroid (weight 1): a squeeze off the middle pushes the object sideways.
-pub(crate) const ASYMMETRY_WEIGHT: f32 = 2.0;
-/// Clearance reported for pads with nothing at all beneath them (m).
-const CLEARANCE_CAP: f32 = 0.05;
-/// How far above the TCP a surface between the pads must rise to be squeezed (m).
-const SQUEEZE_LEVEL: f32 = 0.003;
-/// How much nearer the camera a surface must be to hide a point behind it (m).
-const OCCLUSION_TOLERANCE: f32 = 0.002;
-/// Angles the planner tries over the half turn.
-pub(crate) const PLANNED_ANGLES: u32 = 16;
-/// Sampling step of the planner's point-cloud queries (m).
-pub(crate) const SAMPLING_STEP: f32 = 0.002;
-
-impl OracleConfig {
-    /// The default planner on `angles` evenly spaced angles (8: the 22.5° steps a person
-    /// turns the gripper in, which the scripted clicker and the browser test plan in).
-    pub fn with_angles(angles: u32) -> Self {
-        OracleConfig {
-            angles,
-            ..OracleConfig::default()
-        }
-    }
-}
-
-impl Default for OracleConfig {
-    fn default() -> Self {
-        Self {
-            opening: GRIPPER.max_opening,
-            pad_width: GRIPPER.pad_width,
-            pad_thickness: GRIPPER.pad_thickness,
-            pad_height: GRIPPER.pad_height,
-            palm_height: GRIPPER.palm_height(),
-            palm_half_along: GRIPPER.palm_half_along,
-            palm_half_across: GRIPPER.palm_half_across,
-            margin: PLANNING_MARGIN,
-            max_slant: MAX_SLANT,
-            angles: PLANNED_ANGLES,
-            step: SAMPLING_STEP,
-        }
-    }
-}
-
-/// A planned grasp with its quality terms.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
-pub struct OraclePlan {
-    /// The grasp to click.
-    pub grasp: PixelGrasp,
-    /// Smallest height of free space under the pads' footprints (m), capped at 5 cm.
-    pub(crate) clearance: f32,
-    /// Distance from the grasp centre to the object's visible centroid (m).
-    pub(crate) off_center: f32,
-    /// How far the squeezed span's middle is from the grasp centre (m): the pads would
-    /// push the object sideways by this much.
-    pub(crate) asymmetry: f32,
-    /// Object width along the closing line at pad height (m).
-    pub width: f32,
-    /// How much the squeezed outline shifts across a pad's width (m): 0 for faces square to the jaw.
-    pub(crate) slant: f32,
-}
 
 /// Why no grasp was found.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -122,15 +32,12 @@ pub enum OracleError {
         /// How many were rejected for each reason, in [`Rejection`] order; zero counts left out.
         rejected: Vec<(Rejection, usize)>,
     },
-    /// None of the objects in the bin is visible, so there is nothing to plan on.
-    #[error("no object is visible in bin 1")]
-    NothingInBin,
 }
 
 fn tally(rejected: &[(Rejection, usize)]) -> String {
     rejected
         .iter()
-        .map(|(r, n)| format!("{n} {r}"))
+        .map(|(r, n)| format!("{n} {}", r.help()))
         .collect::<Vec<_>>()
         .join(", ")
 }
@@ -140,8 +47,8 @@ pub fn plan(
     camera: &Camera,
     frame: &Frame,
     id: u16,
-    config: &OracleConfig,
-) -> Result<OraclePlan, OracleError> {
+    config: &CheckConfig,
+) -> Result<Assessment, OracleError> {
     let mut pixels = Vec::new();
     for v in 0..frame.height {
         for u in 0..frame.width {
@@ -155,9 +62,9 @@ pub fn plan(
     }
     let world_of = |(u, v): (u32, u32)| camera.pixel_to_world(u, v, frame.depth_at(u, v));
     let centroid = pixels.iter().map(|&p| world_of(p)).sum::<Vector>() / pixels.len() as f32;
-    let cloud = Cloud::new(camera, frame);
+    let cloud = Cloud::new(&HeightMap::new(camera, frame));
 
-    let mut best: Option<(f32, OraclePlan)> = None;
+    let mut best: Option<(f32, Assessment)> = None;
     let mut candidates = 0;
     let mut rejected = [0usize; Rejection::COUNT];
     for &(u, v) in &pixels {
@@ -165,7 +72,7 @@ pub fn plan(
             candidates += 1;
             let angle_deg = k as f32 * 180.0 / config.angles as f32;
             let grasp = PixelGrasp { u, v, angle_deg };
-            let plan = match evaluate(&cloud, camera, frame, grasp, centroid, config) {
+            let plan = match check_grasp(&cloud, camera, frame, grasp, centroid, config) {
                 Ok(plan) => plan,
                 Err(reject) => {
                     rejected[reject as usize] += 1;
@@ -186,286 +93,10 @@ pub fn plan(
     best.map(|(_, plan)| plan)
         .ok_or_else(|| OracleError::Ungraspable {
             candidates,
-            rejected: Rejection::ALL
+            rejected: <Rejection as Named>::ALL
                 .iter()
                 .map(|&r| (r, rejected[r as usize]))
                 .filter(|&(_, n)| n > 0)
                 .collect(),
         })
-}
-
-/// Checks grasps the way the planner does, from the depth image alone: no mask, so the grasp
-/// centre stands in for the object's centroid.
-pub struct DepthCheck<'a> {
-    camera: &'a Camera,
-    frame: &'a Frame,
-    cloud: Cloud,
-    config: OracleConfig,
-}
-
-impl<'a> DepthCheck<'a> {
-    /// Builds the point cloud of `frame` once for many checks.
-    pub fn new(camera: &'a Camera, frame: &'a Frame, config: OracleConfig) -> Self {
-        Self {
-            camera,
-            frame,
-            cloud: Cloud::new(camera, frame),
-            config,
-        }
-    }
-
-    /// The planner's verdict on one grasp: its quality terms, or why it would be rejected.
-    pub fn assess(&self, grasp: PixelGrasp) -> Result<OraclePlan, Rejection> {
-        let centre = world_grasp(self.camera, self.frame, grasp).tcp;
-        evaluate(
-            &self.cloud,
-            self.camera,
-            self.frame,
-            grasp,
-            centre,
-            &self.config,
-        )
-    }
-}
-
-/// Why the planner rejects a candidate grasp.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
-pub enum Rejection {
-    /// What lies between the pads at pad height does not fit the open jaw with the margin.
-    #[error("wider than the opening")]
-    TooWide,
-    /// Something is in a pad's footprint above the TCP.
-    #[error("no room for a pad")]
-    PadBlocked,
-    /// The camera cannot see down to the TCP in a pad's footprint.
-    #[error("a pad's footprint hidden from the camera")]
-    PadHidden,
-    /// Something rises into the palm's volume.
-    #[error("palm would hit something")]
-    Palm,
-    /// The jaw would close on air.
-    #[error("nothing between the pads")]
-    NothingBetweenPads,
-    /// The squeezed part reaches fewer than two of a pad's strips.
-    #[error("pads would only catch an edge")]
-    Edge,
-    /// The squeezed outline shifts too much across a pad.
-    #[error("faces slanted to the jaw")]
-    Slanted,
-}
-
-impl Rejection {
-    const COUNT: usize = 7;
-    const ALL: [Rejection; Rejection::COUNT] = [
-        Rejection::TooWide,
-        Rejection::PadBlocked,
-        Rejection::PadHidden,
-        Rejection::Palm,
-        Rejection::NothingBetweenPads,
-        Rejection::Edge,
-        Rejection::Slanted,
-    ];
-}
-
-/// The camera's depth as a world point cloud, bucketed on a horizontal grid for box queries.
-struct Cloud {
-    min: [f32; 2],
-    cell: f32,
-    cols: usize,
-    rows: usize,
-    buckets: Vec<Vec<Vector>>,
-}
-
-impl Cloud {
-    fn new(camera: &Camera, frame: &Frame) -> Self {
-        let points: Vec<Vector> = (0..frame.height)
-            .flat_map(|v| (0..frame.width).map(move |u| (u, v)))
-            .filter(|&(u, v)| frame.depth_at(u, v) < camera.far)
-            .map(|(u, v)| camera.pixel_to_world(u, v, frame.depth_at(u, v)))
-            .collect();
-        let (lo, hi) = points
-            .iter()
-            .fold(([f32::MAX; 2], [f32::MIN; 2]), |(lo, hi), p| {
-                (
-                    [lo[0].min(p.x), lo[1].min(p.y)],
-                    [hi[0].max(p.x), hi[1].max(p.y)],
-                )
-            });
-        let cell = 0.01;
-        let cols = (((hi[0] - lo[0]) / cell) as usize + 1).max(1);
-        let rows = (((hi[1] - lo[1]) / cell) as usize + 1).max(1);
-        let mut cloud = Self {
-            min: lo,
-            cell,
-            cols,
-            rows,
-            buckets: vec![Vec::new(); cols * rows],
-        };
-        for p in points {
-            let (i, j) = cloud.cell_of(p.x, p.y);
-            cloud.buckets[j * cols + i].push(p);
-        }
-        cloud
-    }
-
-    fn cell_of(&self, x: f32, y: f32) -> (usize, usize) {
-        let i = ((x - self.min[0]) / self.cell).clamp(0.0, (self.cols - 1) as f32) as usize;
-        let j = ((y - self.min[1]) / self.cell).clamp(0.0, (self.rows - 1) as f32) as usize;
-        (i, j)
-    }
-
-    /// Points within `radius` (horizontally) of `center`.
-    fn near(&self, center: Vector, radius: f32) -> impl Iterator<Item = Vector> + '_ {
-        let (i0, j0) = self.cell_of(center.x - radius, center.y - radius);
-        let (i1, j1) = self.cell_of(center.x + radius, center.y + radius);
-        (j0..=j1).flat_map(move |j| {
-            (i0..=i1).flat_map(move |i| self.buckets[j * self.cols + i].iter().copied())
-        })
-    }
-}
-
-/// Fraction of the pad height at which the pad footprint must be in view.
-const OCCLUSION_PROBE: f32 = 1.0;
-
-/// True when the camera sees a surface in front of `p` (or `p` is outside the image).
-fn occluded(camera: &Camera, frame: &Frame, p: Vector) -> bool {
-    let Some([u, v, depth]) = camera.project(p) else {
-        return true;
-    };
-    if u < 0.0 || v < 0.0 || u >= frame.width as f32 || v >= frame.height as f32 {
-        return true;
-    }
-    frame.depth_at(u as u32, v as u32) < depth - OCCLUSION_TOLERANCE
-}
-
-/// What the camera cannot see can still be in the way: a rounded side bulges out under the
-/// edge it shows. So both pads' footprints must be in plain view at mid-pad height.
-fn pads_in_view(
-    camera: &Camera,
-    frame: &Frame,
-    target: &WorldGrasp,
-    config: &OracleConfig,
-) -> bool {
-    let (tcp, along) = (target.tcp, target.closing);
-    let across = Vector::new(-along.y, along.x, 0.0);
-    let half_open = config.opening / 2.0;
-    let pad_outer = half_open + config.pad_thickness + config.margin;
-    let pad_half_width = config.pad_width / 2.0 + config.margin;
-    let mid_pad = tcp.z + config.pad_height * OCCLUSION_PROBE;
-    for side in [-1.0f32, 1.0] {
-        let mut s = half_open;
-        while s <= pad_outer {
-            let mut w = -pad_half_width;
-            while w <= pad_half_width {
-                let p = tcp + along * (side * s) + across * w;
-                if occluded(camera, frame, Vector::new(p.x, p.y, mid_pad)) {
-                    return false;
-                }
-                w += config.step * 2.0;
-            }
-            s += config.step * 2.0;
-        }
-    }
-    true
-}
-
-/// The planner's test of one grasp: its quality terms, or the first check it fails.
-fn evaluate(
-    cloud: &Cloud,
-    camera: &Camera,
-    frame: &Frame,
-    grasp: PixelGrasp,
-    centroid: Vector,
-    config: &OracleConfig,
-) -> Result<OraclePlan, Rejection> {
-    let target = world_grasp(camera, frame, grasp);
-    let tcp = target.tcp;
-    let along = target.closing;
-    let across = Vector::new(-along.y, along.x, 0.0);
-    let half_open = config.opening / 2.0;
-    let limit = half_open - config.margin;
-    let pad_outer = half_open + config.pad_thickness + config.margin;
-    let pad_half_width = config.pad_width / 2.0 + config.margin;
-
-    let mut lo = f32::MAX;
-    let mut hi = f32::MIN;
-    let mut covered = [false; 3];
-    let mut side_lo = [f32::MAX; 2];
-    let mut side_hi = [f32::MIN; 2];
-    let mut clearance = CLEARANCE_CAP;
-    let palm_half = [
-        config.palm_half_along + config.margin,
-        config.palm_half_across + config.margin,
-    ];
-    let reach = pad_outer.max(palm_half[0]) + pad_half_width.max(palm_half[1]);
-    for p in cloud.near(tcp, reach) {
-        let d = p - tcp;
-        let s = d.dot(along);
-        let signed_w = d.dot(across);
-        let w = signed_w.abs();
-        if s.abs() <= palm_half[0]
-            && w <= palm_half[1]
-            && p.z >= tcp.z + config.palm_height - config.margin
-        {
-            return Err(Rejection::Palm);
-        }
-        if w > pad_half_width || s.abs() > pad_outer {
-            continue;
-        }
-        if s.abs() >= half_open {
-            // Under a pad: the surface must be below the pad's lower edge.
-            if p.z >= tcp.z {
-                return Err(Rejection::PadBlocked);
-            }
-            clearance = clearance.min(tcp.z - p.z);
-        } else if w <= config.pad_width / 2.0 && p.z > tcp.z + SQUEEZE_LEVEL {
-            // Between the pads at pad height: part of what will be squeezed.
-            if s.abs() > limit {
-                return Err(Rejection::TooWide);
-            }
-            lo = lo.min(s);
-            hi = hi.max(s);
-            let half = usize::from(signed_w > 0.0);
-            side_lo[half] = side_lo[half].min(s);
-            side_hi[half] = side_hi[half].max(s);
-            // Which halves of the pads' width the squeezed part covers.
-            if signed_w < -config.pad_width / 4.0 {
-                covered[0] = true;
-            } else if signed_w > config.pad_width / 4.0 {
-                covered[1] = true;
-            } else {
-                covered[2] = true;
-            }
-        }
-    }
-    if lo > hi {
-        return Err(Rejection::NothingBetweenPads);
-    }
-    // A grasp whose pads only catch the object's edge lets it pivot out.
-    if covered.iter().filter(|&&c| c).count() < 2 {
-        return Err(Rejection::Edge);
-    }
-    if !pads_in_view(camera, frame, &target, config) {
-        return Err(Rejection::PadHidden);
-    }
-    // Where the squeezed outline differs between the two halves of a pad, the surface is
-    // slanted to the jaw and a squeeze pushes the object out sideways.
-    let slant = if side_lo[0] <= side_hi[0] && side_lo[1] <= side_hi[1] {
-        (side_lo[0] - side_lo[1])
-            .abs()
-            .max((side_hi[0] - side_hi[1]).abs())
-    } else {
-        config.pad_width
-    };
-    if slant > config.max_slant {
-        return Err(Rejection::Slanted);
-    }
-    Ok(OraclePlan {
-        grasp,
-        clearance,
-        slant,
-        off_center: Vector::new(tcp.x - centroid.x, tcp.y - centroid.y, 0.0).length(),
-        asymmetry: (lo + hi).abs() / 2.0,
-        width: hi - lo,
-    })
 }

@@ -87,9 +87,14 @@ pub(crate) struct Ur5 {
 }
 
 impl Default for Ur5 {
-    /// Standard UR5 with its base frame at (0, 0, 0.4) m in the world, unrotated.
+    /// Standard UR5 with its base frame at the workcell's [`super::ROBOT_BASE`], unrotated.
     fn default() -> Self {
-        Self::new(Isometry3::translation(0.0, 0.0, 0.4))
+        let base = super::ROBOT_BASE;
+        Self::new(Isometry3::translation(
+            base.x.into(),
+            base.y.into(),
+            base.z.into(),
+        ))
     }
 }
 
@@ -487,7 +492,7 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     fn ur5() -> Ur5 {
-        Ur5::new(Isometry3::translation(0.0, 0.0, 0.4))
+        Ur5::default()
     }
 
     fn pose_errors(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {
@@ -518,7 +523,6 @@ mod tests {
     #[test]
     fn home_and_place_forward_kinematics() {
         let robot = ur5();
-        assert_eq!(robot, Ur5::default());
 
         let home = robot.forward(&HOME_JOINTS);
         assert_vec(

@@ -3,10 +3,10 @@
 //! Everything here uses rapier's own math types (glam, f32); the closed-form IK in
 //! `kinematics` works in nalgebra f64 and is converted at its call sites in `pick`.
 
-mod depth;
 mod guard;
 mod invariants;
 pub(crate) mod kinematics;
+mod penetration;
 pub mod pick;
 pub(crate) mod robot;
 mod shapes;
@@ -22,7 +22,7 @@ use crate::assets::objects::ObjectModel;
 use crate::grasp::tote::{self, Tote, PICK_TOTE, PLACE_TOTE};
 use crate::vision::camera::Camera;
 use crate::vision::render::{Drawable, Shape};
-use depth::penetration;
+use penetration::penetration;
 use robot::{groups, Arm, Gripper};
 use shapes::shared_shape;
 use stepping::configure_solver;

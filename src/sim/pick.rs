@@ -10,6 +10,7 @@ use super::guard::{CollisionStop, Guard, CREEP_GAP, CREEP_RATE};
 use super::{in_contact, ObjectLocation, Workcell, PHYSICS_HZ};
 use crate::grasp::gripper::GRIPPER;
 use crate::grasp::WorldGrasp;
+use crate::named::named_enum;
 use crate::sim::kinematics::{
     IkError, JointTrajectory, Joints, TrapezoidProfile, Ur5, HOME_JOINTS, PLACE_JOINTS,
 };
@@ -48,35 +49,22 @@ const RECOVER_RELIEF: f32 = 0.03;
 /// Distance within which a pad counts as touching an object (m).
 const TOUCH_GAP: f32 = 0.002;
 
-/// Why an attempt ended the way it did.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum PickReason {
-    /// Lifted, carried home and placed.
-    Success,
-    /// The fingers closed on nothing.
-    EmptyHand,
-    /// Something was touched but it did not stay between the pads up to home.
-    Slipped,
-    /// The arm or hand ran into the totes, the ground, or pressed hard on an object.
-    Collision,
-    /// No IK solution along the path.
-    IkUnreachable,
-    /// The planner found no feasible grasp (reported by planners, not by execution).
-    Ungraspable,
-}
-
-impl PickReason {
-    /// The snake_case name used in reports.
-    pub(crate) fn as_str(self) -> &'static str {
-        match self {
-            PickReason::Success => "success",
-            PickReason::EmptyHand => "empty_hand",
-            PickReason::Slipped => "slipped",
-            PickReason::Collision => "collision",
-            PickReason::IkUnreachable => "ik_unreachable",
-            PickReason::Ungraspable => "ungraspable",
-        }
+named_enum! {
+    /// Why an attempt ended the way it did.
+    #[derive(serde::Deserialize)]
+    pub enum PickReason {
+        /// Lifted, carried home and placed.
+        Success = "success", "lifted, carried home and placed",
+        /// The fingers closed on nothing.
+        EmptyHand = "empty_hand", "the fingers closed on nothing",
+        /// Something was touched but it did not stay between the pads up to home.
+        Slipped = "slipped", "something was touched but it did not stay between the pads up to home",
+        /// The arm or hand ran into the totes, the ground, or pressed hard on an object.
+        Collision = "collision", "the arm or hand ran into the totes, the ground, or pressed hard on an object",
+        /// No IK solution along the path.
+        IkUnreachable = "ik_unreachable", "no IK solution along the path",
+        /// The planner found no feasible grasp (reported by planners, not by execution).
+        Ungraspable = "ungraspable", "the planner found no feasible grasp",
     }
 }
 

@@ -3,7 +3,7 @@
 
 use rapier3d::prelude::*;
 
-use super::depth::DropMisfiredContacts;
+use super::penetration::DropMisfiredContacts;
 use super::{Workcell, PHYSICS_HZ};
 use crate::sim::kinematics::Joints;
 
@@ -18,7 +18,7 @@ const STILL_ANGULAR_SPEED: f32 = 0.05;
 /// [`FAST_OBJECT_SPEED`]. An object dropped 0.2–0.7 m lands at 2–3.7 m/s, 8–15 mm per step, and
 /// a landing (or a drill landing on a thin clamp) left an object 5–10 mm inside the floor for a
 /// step or two: 15 times in the drops of the soak's 200 scenes. With quarter steps there were
-/// none; halves left 3, and quarters only above 0.5 m/s left 1 (BENCHMARKS.md, stop 14).
+/// none; halves left 3, and quarters only above 0.5 m/s left 1 (BENCHMARKS.md#physics-soak).
 pub(super) const FAST_SUBSTEPS: u32 = 4;
 /// See [`FAST_SUBSTEPS`] (m/s).
 const FAST_OBJECT_SPEED: f32 = 0.3;
@@ -42,7 +42,7 @@ pub(super) fn configure_solver(world: &mut PhysicsWorld) {
     // the floor and walls, clusters let a dropped hammer land 5–7 mm into the empty floor, and
     // held a mustard bottle resting by a wall between two of that wall's clusters with opposite
     // normals, each pushing 12 N·s a step, until one let go and the bottle shot off at 1.7 m/s,
-    // 10.9 mm deep. Without clustering the soak found neither (BENCHMARKS.md, stop 14).
+    // 10.9 mm deep. Without clustering the soak found neither (BENCHMARKS.md#physics-soak).
     p.contact_clustering = false;
 }
 

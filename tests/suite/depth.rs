@@ -9,7 +9,8 @@ use graspmap::assets::objects::ObjectLibrary;
 use graspmap::data::clutter::{round_object_id, round_objects};
 use graspmap::data::input::{height_from_depth_mm, read_depth_png};
 use graspmap::grasp::tote::FLOOR_TOP;
-use graspmap::policy::oracle::{self, OracleConfig};
+use graspmap::policy::oracle;
+use graspmap::policy::verify::CheckConfig;
 use graspmap::sim::Workcell;
 use graspmap::vision::camera::Camera;
 use graspmap::vision::render::{render, Drawable, Shape};
@@ -86,7 +87,7 @@ fn clutter_round(
         &Camera::top_down(),
         &frame,
         round_object_id(&order, on),
-        &OracleConfig::default(),
+        &CheckConfig::default(),
     )
     .unwrap();
     let g = plan.grasp;

@@ -8,7 +8,9 @@ use graspmap::grasp::world::{
     closing_direction, image_angle, world_grasp, WorldGrasp, DEPTH_BELOW_SURFACE, MIN_TCP_HEIGHT,
 };
 use graspmap::grasp::PixelGrasp;
-use graspmap::policy::oracle::{self, DepthCheck, OracleConfig};
+use graspmap::policy::oracle;
+use graspmap::policy::heights::HeightMap;
+use graspmap::policy::verify::{CheckConfig, Verifier};
 use graspmap::sim::pick::{PickOutcome, PickReason};
 use graspmap::sim::{ObjectLocation, Workcell};
 use graspmap::vision::camera::Camera;
@@ -43,7 +45,7 @@ fn pick_pixel(cell: &mut Workcell, u: u32, v: u32, angle_deg: f32) -> PickOutcom
 fn pick_oracle(cell: &mut Workcell) -> PickOutcome {
     let camera = Camera::top_down();
     let frame = cell.capture();
-    let plan = oracle::plan(&camera, &frame, 1, &OracleConfig::default()).unwrap();
+    let plan = oracle::plan(&camera, &frame, 1, &CheckConfig::default()).unwrap();
     cell.pick(&world_grasp(&camera, &frame, plan.grasp))
 }
 
@@ -102,8 +104,8 @@ fn oracle_lifts_a_standing_soup_can() {
 
 #[test]
 fn oracle_lifts_the_clamp() {
-    // Yaw 0.5 rad. Of yaws 0–1.2 rad, only 0.4 fails since stop 14's physics: a finger reads
-    // 153 N on the clamp, just over the 150 N protective stop (BENCHMARKS.md, stop 14).
+    // Yaw 0.5 rad. Of yaws 0–1.2 rad, only 0.4 fails on this physics: a finger reads 153 N on
+    // the clamp, just over the 150 N protective stop (docs/history.md, the physics soak).
     let mut cell = placed(
         "YcbMediumClamp",
         Pose::from_parts(
@@ -118,8 +120,8 @@ fn oracle_lifts_the_clamp() {
 #[test]
 fn oracle_lifts_a_lying_mustard_bottle() {
     // On its broad face the body (99 mm) is wider than the jaw; what fits is the cap end.
-    // Cap grasps are marginal at some yaws (BENCHMARKS.md, stop 15, sweeps yaws 0–1.2 rad):
-    // since stop 15's contact check, 0.3 and 0.5 drop the bottle on the way to bin 2, while
+    // Cap grasps are marginal at some yaws (docs/history.md, the sweep of yaws 0–1.2 rad):
+    // since the misfired-contact check, 0.3 and 0.5 drop the bottle on the way to bin 2, while
     // 0.6, 0.8 and 1.0 all place it; this one sits in the middle of that run.
     let mut cell = placed(
         "YcbMustardBottle",
@@ -246,7 +248,8 @@ fn the_depth_test_passes_a_grasp_across_a_lying_can_and_vetoes_one_along_it_or_b
     let cell = lying_can(0.0);
     let camera = Camera::top_down();
     let frame = cell.capture();
-    let test = DepthCheck::new(&camera, &frame, OracleConfig::default());
+    let heights = HeightMap::new(&camera, &frame);
+    let test = Verifier::new(&camera, &frame, &heights, CheckConfig::default());
     let (u, v) = center_pixel(&cell);
     let across = PixelGrasp {
         u,

@@ -11,7 +11,8 @@ use std::time::{Duration, Instant};
 use graspmap::assets::objects::ObjectLibrary;
 use graspmap::data::labels::LabelStore;
 use graspmap::grasp::PixelGrasp;
-use graspmap::policy::oracle::{self, OracleConfig};
+use graspmap::policy::oracle;
+use graspmap::policy::verify::CheckConfig;
 use graspmap::sim::Workcell;
 use graspmap::vision::camera::Camera;
 
@@ -181,7 +182,7 @@ pub fn oracle_click(object: &str, round_seed: u64) -> PixelGrasp {
     cell.drop_objects(std::slice::from_ref(&model), round_seed)
         .unwrap();
     let frame = cell.capture();
-    let config = OracleConfig::with_angles(8);
+    let config = CheckConfig::with_angles(8);
     oracle::plan(&Camera::top_down(), &frame, 1, &config)
         .unwrap()
         .grasp

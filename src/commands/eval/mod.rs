@@ -1,8 +1,6 @@
 //! `graspmap eval`: a policy (model, random or oracle) picks objects in simulation; per-object
 //! tables, Wilson intervals, visualisations and videos (docs/evaluation.md).
 
-mod results;
-
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -10,24 +8,28 @@ use std::time::Instant;
 use anyhow::{bail, Context as _};
 use image::RgbImage;
 
-use super::interrupt;
-use super::report::write_versioned_report;
-use super::video::save_video_atomic;
 use super::Context;
 use crate::assets::objects::ObjectModel;
 use crate::data::atomic::save_image_atomic;
 use crate::grasp::draw::draw_grasp;
 use crate::grasp::world_grasp;
+use crate::interrupt;
 use crate::model::inference::AffordanceModel;
 use crate::model::unet::Precision;
-use crate::named::{named_enum, Named};
-use crate::policy::affordance::{Suppression, SuppressionConfig};
+use crate::named::Named;
 use crate::policy::baselines::{OraclePolicy, RandomPolicy};
 use crate::policy::model::{ModelPolicy, ModelPolicyConfig};
+use crate::policy::suppression::{Suppression, SuppressionConfig};
+use crate::policy::PolicyKind;
 use crate::policy::{Observation, Policy};
+use crate::present::envelope::write_versioned_report;
+use crate::present::eval_report::Task;
+use crate::present::eval_report::{
+    report_lines, summarise, AttemptRecord, AttemptTiming, BinOutcome, SceneRun,
+};
+use crate::present::video::save_video_atomic;
 use crate::sim::pick::{PickOutcome, PickReason};
 use crate::sim::{ObjectLocation, Workcell, WorkcellConfig};
-use results::{report_lines, summarise, AttemptRecord, AttemptTiming, BinOutcome, SceneRun};
 
 /// Attempts per object in the train and test tasks (the reference's).
 pub(crate) const ATTEMPTS_PER_OBJECT: u32 = 3;
@@ -36,43 +38,6 @@ pub(crate) const SINGLE_OBJECT_SEED_OFFSET: u64 = 10_000;
 /// Physics steps between episode video frames: 10 fps, so that a 25-attempt episode stays
 /// near 3 MB as MP4 (about 19 MB as GIF); `grasp --record` films one attempt at 24 fps.
 pub(crate) const EPISODE_EVERY_STEPS: u64 = 24;
-/// The default empty_bin scene (the reference's).
-pub(crate) const DEFAULT_EMPTY_BIN_SEED: u64 = 2;
-
-named_enum! {
-    /// The evaluations, spelled as the reference spells them.
-    pub enum Task {
-        /// Each training object alone, 3 attempts each.
-        Train = "train", "each training object alone, 3 attempts each",
-        /// Each test (unseen) object alone, 3 attempts each.
-        Test = "test", "each test (unseen) object alone, 3 attempts each",
-        /// All 15 objects in bin 1 at once; move as many as possible to bin 2.
-        EmptyBin = "empty_bin", "all 15 objects in bin 1 at once; move as many as possible to bin 2",
-    }
-}
-
-impl Task {
-    /// The seed a run without `--seed` uses: 2 for empty_bin, 0 otherwise (the reference's).
-    pub(crate) fn default_seed(self) -> u64 {
-        match self {
-            Task::EmptyBin => DEFAULT_EMPTY_BIN_SEED,
-            Task::Train | Task::Test => 0,
-        }
-    }
-}
-
-named_enum! {
-    /// Who chooses the grasps.
-    pub enum PolicyKind {
-        /// The trained affordance model.
-        Model = "model", "the trained affordance model (argmax over 8 rotations)",
-        /// A random point of bin 1's floor and a random angle.
-        Random = "random", "a uniformly random point of bin 1's floor and a random angle",
-        /// The planner, from ground-truth masks and depth.
-        Oracle = "oracle", "the workcell's planner, from ground-truth masks and depth",
-    }
-}
-
 /// Everything one `graspmap eval` run needs, resolved and checked by the CLI.
 #[derive(Debug, Clone)]
 pub(crate) struct EvalConfig {
@@ -388,7 +353,7 @@ impl Evaluation<'_> {
                     if record.success {
                         "success"
                     } else {
-                        record.reason.as_str()
+                        record.reason.name()
                     }
                 ));
                 attempts.push(record);

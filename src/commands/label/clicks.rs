@@ -14,8 +14,9 @@ use super::LabelConfig;
 use crate::data::atomic::save_image_atomic;
 use crate::data::labels::{Label, Labels, Progress};
 use crate::grasp::draw::draw_grasp;
-use crate::grasp::{normalize_angle, PixelError, PixelGrasp, BIN_DEG, IMAGE_SIZE};
-use crate::policy::oracle::{self, OracleConfig};
+use crate::grasp::{normalize_angle, PixelGrasp, BIN_DEG, IMAGE_SIZE};
+use crate::policy::oracle;
+use crate::policy::verify::CheckConfig;
 use crate::vision::camera::Camera;
 use crate::vision::render::Frame;
 
@@ -34,8 +35,8 @@ pub(super) enum Clicker {
     Interactive { preview: PathBuf },
     /// A person at the labelling page, which the server shows.
     Web {
-        server: Box<crate::commands::web::WebServer>,
-        session: Box<crate::commands::web::session::LabelSession>,
+        server: Box<crate::present::web::WebServer>,
+        session: Box<crate::present::web::session::LabelSession>,
     },
 }
 
@@ -66,7 +67,7 @@ impl Clicker {
                 noise_deg,
             } => {
                 // A person clicks in 22.5° steps; plan in those steps too.
-                let config = OracleConfig::with_angles((180.0 / ANGLE_STEP_DEG) as u32);
+                let config = CheckConfig::with_angles((180.0 / ANGLE_STEP_DEG) as u32);
                 let plan = match oracle::plan(camera, frame, id, &config) {
                     Ok(plan) => plan,
                     Err(e) => return Ok(Err(e.to_string())),
@@ -117,73 +118,6 @@ fn human_noise(grasp: PixelGrasp, noise_px: f32, noise_deg: f32, round_seed: u64
         v,
         angle_deg: normalize_angle((angle / ANGLE_STEP_DEG).round() * ANGLE_STEP_DEG),
     }
-}
-
-/// Parses a clicks file: a JSON list of {"object", "x", "y", "angle"}, grouped per object in order.
-pub(super) fn read_clicks(
-    path: &Path,
-    train: &[String],
-) -> anyhow::Result<BTreeMap<String, Vec<Label>>> {
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("reading --clicks {}", path.display()))?;
-    parse_clicks(&text, path, train)
-}
-
-/// Parses a clicks file's text; `path` names it in errors.
-pub(crate) fn parse_clicks(
-    text: &str,
-    path: &Path,
-    train: &[String],
-) -> anyhow::Result<BTreeMap<String, Vec<Label>>> {
-    let value: serde_json::Value = serde_json::from_str(text)
-        .with_context(|| format!("--clicks {} is not valid JSON", path.display()))?;
-    let list = value.as_array().with_context(|| {
-        format!(
-            "--clicks {}: expected a list of {{\"object\", \"x\", \"y\", \"angle\"}}",
-            path.display()
-        )
-    })?;
-    let mut clicks: BTreeMap<String, Vec<Label>> = BTreeMap::new();
-    for (i, entry) in list.iter().enumerate() {
-        let at = || format!("--clicks {} entry {}", path.display(), i + 1);
-        let object = entry
-            .get("object")
-            .and_then(|o| o.as_str())
-            .with_context(|| format!("{}: missing \"object\" name", at()))?;
-        if !train.iter().any(|t| t == object) {
-            bail!(
-                "{}: unknown object '{object}' (training objects: {})",
-                at(),
-                train.join(", ")
-            );
-        }
-        let number = |key: &str| {
-            entry
-                .get(key)
-                .and_then(|v| v.as_f64())
-                .filter(|v| v.is_finite())
-                .with_context(|| {
-                    format!(
-                        "{}: \"{key}\" = {} is not a number",
-                        at(),
-                        entry.get(key).map_or("missing".into(), |v| v.to_string())
-                    )
-                })
-        };
-        let grasp = match PixelGrasp::checked(number("x")?, number("y")?, number("angle")?) {
-            Ok(grasp) => grasp,
-            Err(PixelError::OutOfImage { axis, value, max }) => {
-                bail!(
-                    "{}: \"{axis}\" = {value} must be an integer in 0..={max}",
-                    at()
-                )
-            }
-            Err(other) => bail!("{}: {other}", at()),
-        };
-        let label = Label::from(grasp);
-        clicks.entry(object.to_owned()).or_default().push(label);
-    }
-    Ok(clicks)
 }
 
 pub(super) fn check_enough_clicks(

@@ -13,20 +13,20 @@ use std::time::Instant;
 
 use anyhow::bail;
 
-use super::interrupt;
-use super::report::write_report;
 use super::Context;
 use crate::assets::objects::ObjectModel;
-use crate::commands::web::session::{AttemptView, LabelSession};
-use crate::commands::web::WebServer;
+use crate::data::clicks::read_clicks;
 use crate::data::labels::{Label, LabelStore, Labels, Progress};
 use crate::data::lock::StoreLock;
 use crate::grasp::world_grasp;
+use crate::interrupt;
 use crate::metrics::FailureTally;
+use crate::named::Named;
+use crate::present::envelope::write_report;
+use crate::present::web::session::{AttemptView, LabelSession};
+use crate::present::web::WebServer;
 use crate::sim::pick::PickReason;
-#[cfg(test)]
-pub(crate) use clicks::parse_clicks;
-use clicks::{read_clicks, Clicker};
+use clicks::Clicker;
 use store::{check, delete, prepare, writes_depth};
 
 /// One `graspmap label` run, resolved by the CLI.
@@ -419,7 +419,7 @@ impl ObjectJob<'_> {
                     summary.lifted_other += usize::from(lifted.as_deref() != Some(object));
                     self.bar.inc(1);
                 } else {
-                    summary.failures.add(reason.as_str());
+                    summary.failures.add(reason.name());
                 }
                 have = labels.of(object).len();
                 progress.set_rounds(object, round, have as u32);
@@ -430,7 +430,7 @@ impl ObjectJob<'_> {
                         object: object.to_owned(),
                         round: round - 1,
                         grasp: click.as_ref().ok().copied(),
-                        reason: reason.as_str().to_owned(),
+                        reason: reason.name().to_owned(),
                         detail: detail.clone(),
                         stored,
                         frames: film,
@@ -489,7 +489,7 @@ fn round_line(
             g.u,
             g.v,
             g.angle_deg,
-            reason.as_str()
+            reason.name()
         ),
         Err(_) => format!("{object} round {round}: no click: {detail}"),
     }

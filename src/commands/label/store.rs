@@ -5,10 +5,10 @@ use anyhow::bail;
 
 use super::clicks::{check_enough_clicks, Clicker};
 use super::LabelConfig;
-use crate::commands::report::write_report;
 use crate::commands::Context;
-use crate::data::depth::check_depth_files;
+use crate::data::depth_files::check_depth_files;
 use crate::data::labels::{LabelStore, Labels, Progress};
+use crate::present::envelope::write_report;
 
 /// Clears or repairs the store before the rounds: the labels and progress to continue from.
 pub(super) fn prepare(

@@ -5,14 +5,14 @@ use std::sync::Mutex;
 
 use super::{labels_in, lock, ObjectJob, ObjectSummary, Shared};
 use crate::assets::objects::ObjectModel;
-use crate::commands::interrupt;
-use crate::commands::web::labels_page::{self, LabelsAccess};
-use crate::commands::web::report_route::ReportRoute;
-use crate::commands::web::session::LabelSession;
-use crate::commands::web::{Reply, Request, WebServer};
 use crate::data::labels::{LabelStore, Labels, Progress};
 use crate::grasp::gripper::GRIPPER;
 use crate::grasp::tote::{FLOOR_TOP, PICK_TOTE};
+use crate::interrupt;
+use crate::present::web::labels_page::{self, LabelsAccess};
+use crate::present::web::report_route::ReportRoute;
+use crate::present::web::session::LabelSession;
+use crate::present::web::{Reply, Request, WebServer};
 use crate::vision::camera::Camera;
 
 /// Physics steps between two frames of an attempt's animation: 15 frames per simulated second.

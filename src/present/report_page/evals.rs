@@ -10,104 +10,36 @@ use serde::Deserialize;
 
 use super::files::Files;
 use super::{esc, missing};
-use crate::commands::eval::{PolicyKind, Task};
+use crate::metrics::{FailureTally, Spread};
 use crate::named::Named;
+use crate::policy::PolicyKind;
+use crate::present::eval_report::{AttemptRecord, EvalResults, ObjectSummary, SceneRun, Task};
 
 /// Per-attempt visualisations shown per report; the rest stay in their folder.
 const VIS_SHOWN: usize = 6;
 
-/// The parts of a `graspmap.eval/2` report the page shows (other fields are ignored).
+/// A kept `graspmap.eval` report: its results as `eval` writes them, and the two settings of
+/// its run the page needs (other fields are ignored).
 #[derive(Debug, Deserialize)]
 struct Kept {
     schema: String,
     #[serde(default)]
     git_commit: String,
-    config: KeptConfig,
-    results: KeptResults,
+    config: RunSettings,
+    results: EvalResults,
 }
 
+/// Where the evaluation ran and what it recorded, from the report's resolved config.
 #[derive(Debug, Deserialize)]
-struct KeptConfig {
-    global: KeptGlobal,
+struct RunSettings {
+    global: RunGlobal,
     #[serde(default)]
     record: Option<PathBuf>,
 }
 
 #[derive(Debug, Deserialize)]
-struct KeptGlobal {
+struct RunGlobal {
     data: PathBuf,
-}
-
-#[derive(Debug, Deserialize)]
-struct KeptResults {
-    task: String,
-    policy: String,
-    seeds: Vec<u64>,
-    success: KeptRate,
-    #[serde(default)]
-    per_object: Vec<KeptObject>,
-    #[serde(default)]
-    moved: Option<KeptSpread>,
-    #[serde(default)]
-    lost: Option<KeptSpread>,
-    runs: Vec<KeptRun>,
-    #[serde(default)]
-    interrupted: bool,
-    #[serde(default)]
-    video: Option<PathBuf>,
-    #[serde(default)]
-    vis_dir: Option<PathBuf>,
-}
-
-#[derive(Debug, Deserialize)]
-struct KeptRate {
-    successes: usize,
-    trials: usize,
-    rate: f64,
-    wilson_low: f64,
-    wilson_high: f64,
-}
-
-#[derive(Debug, Deserialize)]
-struct KeptSpread {
-    mean: f64,
-    std: f64,
-    min: f64,
-    max: f64,
-}
-
-#[derive(Debug, Deserialize)]
-struct KeptObject {
-    object: String,
-    attempts: usize,
-    successes: usize,
-    failures: BTreeMap<String, usize>,
-}
-
-#[derive(Debug, Deserialize)]
-struct KeptRun {
-    seed: u64,
-    attempts: Vec<KeptAttempt>,
-    #[serde(default)]
-    bin: Option<KeptBin>,
-}
-
-#[derive(Debug, Deserialize)]
-struct KeptAttempt {
-    attempt: u32,
-    #[serde(default)]
-    object: Option<String>,
-    success: bool,
-    reason: String,
-    #[serde(default)]
-    vis: Option<PathBuf>,
-}
-
-#[derive(Debug, Deserialize)]
-struct KeptBin {
-    moved: usize,
-    left: usize,
-    lost: usize,
 }
 
 /// One kept report, read and checked.
@@ -147,26 +79,17 @@ fn read_one(path: &Path) -> anyhow::Result<Entry> {
             path.display()
         )
     })?;
-    let unknown = |what: &str, name: &str| {
-        anyhow::anyhow!("{}: unknown {what} '{name}'; {fix}", path.display())
-    };
     if !matches!(
         report.schema.as_str(),
         "graspmap.eval/1" | "graspmap.eval/2"
     ) {
-        return Err(unknown("schema", &report.schema));
+        anyhow::bail!(
+            "{}: unknown schema '{}'; {fix}",
+            path.display(),
+            report.schema
+        );
     }
-    let r = &report.results;
-    let task = Task::ALL
-        .iter()
-        .copied()
-        .find(|t| t.name() == r.task)
-        .ok_or_else(|| unknown("task", &r.task))?;
-    let policy = PolicyKind::ALL
-        .iter()
-        .copied()
-        .find(|p| p.name() == r.policy)
-        .ok_or_else(|| unknown("policy", &r.policy))?;
+    let (task, policy) = (report.results.task, report.results.policy);
     Ok(Entry {
         path: path.to_path_buf(),
         file_name: path
@@ -250,7 +173,7 @@ fn comparison(task: Task, entries: &[&Entry], files: &mut Files) -> anyhow::Resu
             100.0 * s.wilson_high
         );
         if bin {
-            let spread = |s: &Option<KeptSpread>| {
+            let spread = |s: &Option<Spread>| {
                 s.as_ref().map_or("–".into(), |s| {
                     format!("{:.1} ± {:.1} ({}–{})", s.mean, s.std, s.min, s.max)
                 })
@@ -303,7 +226,7 @@ fn details(entry: &Entry, data_dir: &Path, files: &mut Files) -> anyhow::Result<
     });
     let run_data = &entry.report.config.global.data;
     let dir = format!("{}_{}", entry.task.name(), entry.policy.name());
-    let drawn: Vec<(&KeptRun, &KeptAttempt, &PathBuf)> = r
+    let drawn: Vec<(&SceneRun, &AttemptRecord, &PathBuf)> = r
         .runs
         .iter()
         .flat_map(|run| run.attempts.iter().map(move |a| (run, a)))
@@ -333,7 +256,7 @@ fn details(entry: &Entry, data_dir: &Path, files: &mut Files) -> anyhow::Result<
             let outcome = if attempt.success {
                 "success"
             } else {
-                attempt.reason.as_str()
+                attempt.reason.name()
             };
             let _ = writeln!(
                 html,
@@ -418,7 +341,7 @@ fn video(entry: &Entry, data_dir: &Path, dir: &str, files: &mut Files) -> anyhow
 }
 
 /// train/test: attempts, successes and failure reasons per object.
-fn object_table(rows: &[KeptObject]) -> String {
+fn object_table(rows: &[ObjectSummary]) -> String {
     let mut html = String::from(
         "<table><tr><th>object</th><th>attempts</th><th>successes</th><th>failures</th></tr>\n",
     );
@@ -429,7 +352,7 @@ fn object_table(rows: &[KeptObject]) -> String {
             esc(&o.object),
             o.attempts,
             o.successes,
-            esc(&tally(&o.failures))
+            esc(&tally(o.failures.counts()))
         );
     }
     html.push_str("</table>\n");
@@ -437,14 +360,14 @@ fn object_table(rows: &[KeptObject]) -> String {
 }
 
 /// empty_bin: attempts, successes, moved, left and lost per scene.
-fn scene_table(runs: &[KeptRun]) -> String {
+fn scene_table(runs: &[SceneRun]) -> String {
     let mut html = String::from(
         "<table><tr><th>seed</th><th>attempts</th><th>successes</th><th>moved</th><th>left</th><th>lost</th><th>failures</th></tr>\n",
     );
     for run in runs {
-        let mut failures = BTreeMap::new();
+        let mut failures = FailureTally::default();
         for a in run.attempts.iter().filter(|a| !a.success) {
-            *failures.entry(a.reason.clone()).or_insert(0) += 1;
+            failures.add(a.reason.name());
         }
         let (moved, left, lost) = run
             .bin
@@ -456,7 +379,7 @@ fn scene_table(runs: &[KeptRun]) -> String {
             run.seed,
             run.attempts.len(),
             run.attempts.iter().filter(|a| a.success).count(),
-            esc(&tally(&failures))
+            esc(&tally(failures.counts()))
         );
     }
     html.push_str("</table>\n");

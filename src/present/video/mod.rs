@@ -59,7 +59,7 @@ pub(crate) fn save_video_atomic(
             save_gif_atomic(frames, delay_cs.max(1), path)
         }
     };
-    // GRASPMAP_LOG=debug: the encoding's own share of a recording (BENCHMARKS.md).
+    // GRASPMAP_LOG=debug: the encoding's own share of a recording (BENCHMARKS.md#videos-and-the-report).
     tracing::debug!(
         "{format:?}: {} frames encoded and written in {:.2} s",
         frames.len(),

@@ -1,8 +1,8 @@
-//! `graspmap report`: one self-contained HTML page for a whole run (labels, training, every kept
+//! The run report: one self-contained HTML page for a whole run (labels, training, every kept
 //! evaluation with its baselines, visualisations and video), written beside a folder of the
 //! files it shows and linked relatively, so that the pair opens offline and travels as a zip.
 //!
-//! [`write_report_page`] is the one entry point; `report --serve` calls it too.
+//! [`write_report_page`] is the one entry point; `graspmap report` and its `--serve` call it.
 
 mod evals;
 mod files;
@@ -10,46 +10,11 @@ mod run_parts;
 
 use std::path::{Path, PathBuf};
 
-use super::report::write_report;
-use super::Context;
 pub(crate) use files::files_dir;
 use files::Files;
 
 /// The page's frame and style, embedded in the binary (no CDN, no script).
 const TEMPLATE: &str = include_str!("page.html");
-
-/// Everything one `graspmap report` run needs, resolved by the CLI.
-#[derive(Debug, Clone, serde::Serialize)]
-pub(crate) struct ReportConfig {
-    /// Where the page goes; its files go to `<stem>_files/` beside it.
-    pub(crate) out: PathBuf,
-    /// `--serve`: serve the report and the labels page on this address until Ctrl-C.
-    pub(crate) serve: Option<(std::net::IpAddr, u16)>,
-}
-
-/// Runs the command.
-pub(crate) fn run(context: &Context, config: ReportConfig) -> anyhow::Result<()> {
-    let written = write_report_page(&context.data, &config.out)?;
-    context.say(&format!(
-        "wrote {} and {} files in {}",
-        config.out.display(),
-        written.len() - 1,
-        files::files_dir(&config.out).display()
-    ));
-    if let Some(json) = &context.json {
-        write_report(
-            json,
-            "report",
-            0,
-            &serde_json::json!({ "global": context, "out": config.out }),
-            &serde_json::json!({ "page": config.out, "files": &written[1..] }),
-        )?;
-    }
-    if let Some((host, port)) = config.serve {
-        return super::web::serve_report(context, &config.out, host, port);
-    }
-    Ok(())
-}
 
 /// Writes the report of the run under `data_dir` to `out_html`, and the files it shows to
 /// `<stem>_files/` beside it (only relative links between them). Returns the page's path first,

@@ -19,51 +19,33 @@ use std::time::Duration;
 
 use anyhow::Context as _;
 
-/// `report --serve`: the report at `/report` (and `/`), the labels page at `/labels`, until
-/// Ctrl-C. Deleting a label takes the labels' writer lock for its duration.
-pub(crate) fn serve_report(
-    context: &crate::commands::Context,
-    out: &std::path::Path,
-    host: IpAddr,
-    port: u16,
-) -> anyhow::Result<()> {
-    let server = WebServer::bind(host, port)?;
-    let url = server.url();
-    context.say(&format!(
-        "report at {url}report, labels at {url}labels (Ctrl-C stops the server)"
-    ));
-    let report = report_route::ReportRoute {
-        data: context.data.clone(),
-        out: out.to_path_buf(),
-    };
-    let labels = labels_page::DiskLabels {
-        store: crate::data::labels::LabelStore::new(context.data.join("labels")),
-    };
-    let root = |request: &Request| {
-        (request.path == "/").then(|| {
-            report
-                .answer(&Request {
-                    method: request.method.clone(),
-                    path: "/report".into(),
-                    body: Vec::new(),
-                })
-                .unwrap_or_else(|| Reply::not_found("/report"))
-        })
-    };
-    let report = |request: &Request| report.answer(request);
-    let labels = |request: &Request| labels_page::answer(&labels, request);
-    server.serve(&[&root, &report, &labels], &|| {
-        crate::commands::interrupt::requested().is_some()
-    });
-    context.say("server stopped");
-    Ok(())
-}
-
 /// The largest request body accepted; the API's bodies are a few dozen bytes.
 pub(crate) const MAX_BODY_BYTES: usize = 16 * 1024;
 
 /// The shared stylesheet and helpers of every page.
-const STYLE_CSS: &str = include_str!("../../../assets/web/style.css");
+const STYLE_CSS: &str = include_str!("page/style.css");
+
+/// The head and header every page shares; `{{page}}` names it, `{{nav}}` holds the links.
+const FRAME_HTML: &str = include_str!("page/frame.html");
+
+/// The pages the header links to, in order: path and label.
+const NAV: [(&str, &str); 3] = [("/", "Label"), ("/labels", "Labels"), ("/report", "Report")];
+
+/// A whole page: the shared frame around `main` (the page's own markup from `<main>` on), with
+/// the header naming `page` and marking the link to `path` as the current one.
+pub(crate) fn framed_page(page: &str, path: &str, main: &str) -> String {
+    let nav: String = NAV
+        .iter()
+        .map(|&(href, text)| {
+            let here = if href == path { " class=\"here\"" } else { "" };
+            format!("<a{here} href=\"{href}\">{text}</a>")
+        })
+        .collect();
+    FRAME_HTML
+        .replace("{{page}}", page)
+        .replace("{{nav}}", &nav)
+        + main
+}
 
 /// A parsed request, as the routes see it.
 pub(crate) struct Request {

@@ -10,12 +10,12 @@ use std::time::Duration;
 use image::RgbImage;
 
 use super::{Reply, Request};
-use crate::commands::interrupt;
 use crate::grasp::{normalize_angle, PixelGrasp, BIN_DEG, FINGER_OFFSET_PX, IMAGE_SIZE};
+use crate::interrupt;
 
 /// The labelling page and its script.
-const LABEL_HTML: &str = include_str!("../../../assets/web/label.html");
-const LABEL_JS: &str = include_str!("../../../assets/web/label.js");
+const LABEL_MAIN: &str = include_str!("page/label.html");
+const LABEL_JS: &str = include_str!("page/label.js");
 
 /// The most animation frames sent for one attempt; longer attempts are sampled evenly.
 const MAX_ANIMATION_FRAMES: usize = 90;
@@ -195,7 +195,10 @@ impl LabelSession {
         dataset: &dyn Fn() -> serde_json::Value,
     ) -> Option<Reply> {
         let reply = match (request.method.as_str(), request.path.as_str()) {
-            ("GET", "/") => Reply::text("text/html; charset=utf-8", LABEL_HTML),
+            ("GET", "/") => Reply::text(
+                "text/html; charset=utf-8",
+                &super::framed_page("label", "/", LABEL_MAIN),
+            ),
             ("GET", "/label.js") => Reply::text("text/javascript; charset=utf-8", LABEL_JS),
             ("GET", "/api/state") => Reply::json(&self.state_json(dataset())),
             ("GET", "/api/round.png") => match &self.lock().round {

@@ -6,8 +6,8 @@ use crate::data::labels::{Label, LabelStore, Labels, Progress};
 use crate::grasp::draw::draw_grasp;
 use crate::grasp::PixelGrasp;
 
-const LABELS_HTML: &str = include_str!("../../../assets/web/labels.html");
-const LABELS_JS: &str = include_str!("../../../assets/web/labels.js");
+const LABELS_MAIN: &str = include_str!("page/labels.html");
+const LABELS_JS: &str = include_str!("page/labels.js");
 
 /// How the labels page reaches the dataset: through the running labeller's copy, or on disk.
 pub(crate) trait LabelsAccess: Sync {
@@ -24,7 +24,10 @@ pub(crate) fn answer(access: &dyn LabelsAccess, request: &Request) -> Option<Rep
     let method = request.method.as_str();
     let path = request.path.as_str();
     let reply = match (method, path) {
-        ("GET", "/labels") => Reply::text("text/html; charset=utf-8", LABELS_HTML),
+        ("GET", "/labels") => Reply::text(
+            "text/html; charset=utf-8",
+            &super::framed_page("labels", "/labels", LABELS_MAIN),
+        ),
         ("GET", "/labels.js") => Reply::text("text/javascript; charset=utf-8", LABELS_JS),
         ("GET", "/api/labels") => list(access),
         (_, "/labels" | "/labels.js" | "/api/labels") => {

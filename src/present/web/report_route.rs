@@ -4,7 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use super::{Reply, Request};
-use crate::commands::report_page::{files_dir, write_report_page};
+use crate::present::report_page::{files_dir, write_report_page};
 
 /// Serves the report of the run under `data` (written to `out` and its `_files` folder).
 pub(crate) struct ReportRoute {

@@ -9,10 +9,7 @@ use std::collections::HashSet;
 use std::path::PathBuf;
 
 use super::input::read_depth_png;
-use super::labels::{LabelStore, LABELS_FILE};
-
-/// File-name ending of a label's depth image, after `<Object>_<k>`.
-pub(crate) const DEPTH_SUFFIX: &str = "_depth.png";
+use super::labels::{LabelStore, DEPTH_SUFFIX, LABELS_FILE};
 
 /// Every problem with the dataset's depth files, one line each: none when it has no depth file
 /// at all (the reference layout); otherwise a listed label without its depth file, a depth file

@@ -64,7 +64,7 @@ const MISFIRE_MARGIN: f32 = 0.002;
 /// deeper than any push along the box's axes needs to separate them. Parry's penetration step
 /// misfires now and then on a flat face resting on a box: it gave a convex part of the scissors,
 /// lying at rest in bin 2, a floor contact with a slanted normal at 33.7 mm depth, and the solver
-/// tipped them 9 mm into the floor in one step (BENCHMARKS.md, stops 14 and 15). The part's other
+/// tipped them 9 mm into the floor in one step (BENCHMARKS.md#physics-soak). The part's other
 /// contacts, and the next step's fresh ones, carry it as before.
 pub(super) struct DropMisfiredContacts;
 

@@ -4,13 +4,39 @@
 use std::collections::BTreeMap;
 use std::path::PathBuf;
 
-use super::{PolicyKind, Task};
 use crate::grasp::PixelGrasp;
 use crate::metrics::{median, FailureTally, Rate, Spread};
-use crate::named::Named;
-use crate::policy::affordance::Choice;
+use crate::model::maps::Choice;
+use crate::named::{named_enum, Named};
+use crate::policy::PolicyKind;
 use crate::sim::pick::PickReason;
 use crate::sim::ObjectLocation;
+
+/// The default empty_bin scene (the reference's).
+pub(crate) const DEFAULT_EMPTY_BIN_SEED: u64 = 2;
+
+named_enum! {
+    /// The evaluations, spelled as the reference spells them.
+    #[derive(serde::Deserialize)]
+    pub enum Task {
+        /// Each training object alone, 3 attempts each.
+        Train = "train", "each training object alone, 3 attempts each",
+        /// Each test (unseen) object alone, 3 attempts each.
+        Test = "test", "each test (unseen) object alone, 3 attempts each",
+        /// All 15 objects in bin 1 at once; move as many as possible to bin 2.
+        EmptyBin = "empty_bin", "all 15 objects in bin 1 at once; move as many as possible to bin 2",
+    }
+}
+
+impl Task {
+    /// The seed a run without `--seed` uses: 2 for empty_bin, 0 otherwise (the reference's).
+    pub(crate) fn default_seed(self) -> u64 {
+        match self {
+            Task::EmptyBin => DEFAULT_EMPTY_BIN_SEED,
+            Task::Train | Task::Test => 0,
+        }
+    }
+}
 
 /// Wall seconds of one attempt, by what they were spent on.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -84,8 +110,9 @@ pub(crate) struct SceneRun {
     pub(crate) bin: Option<BinOutcome>,
 }
 
-/// Everything `eval --json` reports.
-#[derive(Debug, Clone, serde::Serialize)]
+/// Everything `eval --json` reports, and what `report` reads back (the fields that schema
+/// version 1 lacked default to empty).
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(crate) struct EvalResults {
     /// train, test or empty_bin.
     pub(crate) task: Task,
@@ -96,6 +123,7 @@ pub(crate) struct EvalResults {
     /// Pick success over all attempts, with its 95 % Wilson interval.
     pub(crate) success: Rate,
     /// train/test: by object.
+    #[serde(default)]
     pub(crate) per_object: Vec<ObjectSummary>,
     /// empty_bin: objects moved per scene (mean ± std over seeds).
     pub(crate) moved: Option<Spread>,
@@ -106,8 +134,10 @@ pub(crate) struct EvalResults {
     /// Every scene and attempt.
     pub(crate) runs: Vec<SceneRun>,
     /// Where the time went.
+    #[serde(default)]
     pub(crate) timing: TimingSummary,
     /// A signal stopped the run: `runs` holds the scenes finished before it (schema version 2).
+    #[serde(default)]
     pub(crate) interrupted: bool,
     /// The episode video that `--record` wrote, as given.
     pub(crate) video: Option<PathBuf>,
@@ -116,7 +146,7 @@ pub(crate) struct EvalResults {
 }
 
 /// The report of a whole evaluation from its scenes.
-pub(super) fn summarise(
+pub(crate) fn summarise(
     task: Task,
     policy: PolicyKind,
     seeds: Vec<u64>,
@@ -188,7 +218,7 @@ pub(super) fn summarise(
 }
 
 /// Per-object line of the train/test table.
-#[derive(Debug, Clone, serde::Serialize)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(crate) struct ObjectSummary {
     /// Object name.
     pub(crate) object: String,
@@ -206,12 +236,12 @@ fn failure_tally<'a>(attempts: impl IntoIterator<Item = &'a AttemptRecord>) -> F
         attempts
             .into_iter()
             .filter(|a| !a.success)
-            .map(|a| a.reason.as_str()),
+            .map(|a| a.reason.name()),
     )
 }
 
 /// The human-readable report: a table, the overall rate, and where the time went.
-pub(super) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<String> {
+pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<String> {
     let mut lines = Vec::new();
     let seeds = results
         .seeds
@@ -302,7 +332,7 @@ pub(super) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
 }
 
 /// Mean per-attempt time.
-#[derive(Debug, Clone, Copy, serde::Serialize)]
+#[derive(Debug, Clone, Copy, Default, serde::Serialize, serde::Deserialize)]
 pub(crate) struct TimingSummary {
     /// Attempts timed.
     pub(crate) attempts: usize,

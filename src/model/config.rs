@@ -1,0 +1,96 @@
+//! What a training run is set to, and the learning-rate schedule's state: both recorded in
+//! every checkpoint, so that inference and `--resume` rebuild exactly what was trained.
+
+use serde::{Deserialize, Serialize};
+
+use crate::data::input::InputKind;
+use crate::model::unet::Precision;
+
+/// Training settings (the reference's defaults).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainConfig {
+    /// Epochs to run (101).
+    pub(crate) epochs: u32,
+    /// Images per optimiser step (8).
+    pub(crate) batch_size: usize,
+    /// Initial Adam learning rate (1e-3).
+    pub(crate) lr: f64,
+    /// Seed of the split, the initial weights, the data order and the augmentation.
+    pub(crate) seed: u64,
+    /// Multiply the LR by this after `patience` epochs without validation improvement (0.1).
+    pub(crate) lr_factor: f64,
+    /// Epochs without improvement before the LR drops (3).
+    pub(crate) patience: u32,
+    /// Arithmetic of the forward and backward passes.
+    pub precision: Precision,
+    /// What the network sees (`--input`). Left out of the JSON when rgb, so rgb checkpoints keep
+    /// the bytes they had before the option existed, and older checkpoints read as rgb.
+    #[serde(default, skip_serializing_if = "InputKind::is_rgb")]
+    pub input: InputKind,
+}
+
+impl Default for TrainConfig {
+    fn default() -> Self {
+        Self {
+            epochs: 101,
+            batch_size: 8,
+            lr: 1e-3,
+            seed: 0,
+            lr_factor: 0.1,
+            patience: 3,
+            precision: Precision::Fp32,
+            input: InputKind::Rgb,
+        }
+    }
+}
+
+/// ReduceLROnPlateau in PyTorch's default mode: relative threshold 1e-4.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Plateau {
+    /// Best validation loss so far (none before the first epoch).
+    pub(crate) best: Option<f64>,
+    /// Epochs since it improved.
+    pub(crate) bad_epochs: u32,
+}
+
+impl Plateau {
+    /// Feeds one epoch's validation loss; returns the new learning rate.
+    pub(crate) fn update(&mut self, loss: f64, lr: f64, config: &TrainConfig) -> f64 {
+        if self.best.is_none_or(|best| loss < best * (1.0 - 1e-4)) {
+            self.best = Some(loss);
+            self.bad_epochs = 0;
+            lr
+        } else {
+            self.bad_epochs += 1;
+            if self.bad_epochs > config.patience {
+                self.bad_epochs = 0;
+                lr * config.lr_factor
+            } else {
+                lr
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn plateau_drops_the_rate_after_patience_epochs_without_improvement() {
+        let config = TrainConfig::default();
+        let mut plateau = Plateau::default();
+        let mut lr = 1e-3;
+        let mut rates = Vec::new();
+        for loss in [1.0, 0.9, 0.95, 0.95, 0.95, 0.95, 0.95, 0.8] {
+            lr = plateau.update(loss, lr, &config);
+            rates.push(lr);
+        }
+        // Three bad epochs are tolerated; the fourth cuts the rate tenfold.
+        assert_eq!(rates[..5], [1e-3; 5]);
+        assert!((rates[5] - 1e-4).abs() < 1e-12, "{rates:?}");
+        assert!((rates[7] - 1e-4).abs() < 1e-12, "{rates:?}");
+    }
+}
