@@ -2,6 +2,7 @@
 # Fingerprints of the main job's outputs, for proving that a refactor changed no behaviour:
 # run it with the binary before and after the change, on the same machine, and diff the two
 # files it writes. Usage: scripts/determinism.sh BINARY OUT.txt
+# No output is kept in the repository: the hashes differ from one CPU to another.
 #   - label on an empty data dir: sha256 of labels.json and of every label image;
 #   - train --epochs 3: sha256 of best.safetensors;
 #   - eval --task test --seed 0 and eval --task empty_bin --seeds 1-2 --n_past_action 8: every

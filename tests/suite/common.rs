@@ -11,6 +11,22 @@ pub fn graspmap(args: &[&str]) -> Output {
         .expect("running graspmap")
 }
 
+/// The commit build.rs embeds in the binary (every JSON report's `git_commit`): what
+/// `git rev-parse --short=12 HEAD` says in the repository, or `unknown` where git or the
+/// repository is missing. build.rs reruns when HEAD moves, so this is the binary's commit as long
+/// as nothing was committed between the build and the test (as in CI).
+pub fn build_commit() -> String {
+    Command::new("git")
+        .args(["rev-parse", "--short=12", "HEAD"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .ok()
+        .filter(|o| o.status.success())
+        .and_then(|o| String::from_utf8(o.stdout).ok())
+        .map(|s| s.trim().to_owned())
+        .unwrap_or_else(|| "unknown".to_owned())
+}
+
 /// Asserts success, showing stderr when it fails.
 pub fn assert_ok(output: &Output) {
     assert!(

@@ -2,7 +2,7 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::common::{assert_ok, assert_user_error, graspmap};
+use crate::common::{assert_ok, assert_user_error, build_commit, graspmap};
 use serde_json::Value;
 
 /// A data directory with an untrained (seeded) MiniUNet checkpoint and a split of one training
@@ -63,6 +63,77 @@ pub(crate) fn read_json(path: &Path) -> Value {
     serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
 }
 
+/// Rounding slack of f64 seconds: each part is an exact `Duration` turned into an f64.
+const CLOCK_SLACK: f64 = 1e-9;
+
+/// One attempt's `timing`: sim, render and network are disjoint intervals measured inside the
+/// attempt's wall time (eval's `attempt` times each on its own clock, and the wall clock starts
+/// before and stops after all of them), so they are non-negative and add up to no more than it.
+fn assert_timing_adds_up(timing: &Value) {
+    let part = |name: &str| {
+        let value = timing[name]
+            .as_f64()
+            .unwrap_or_else(|| panic!("{name} is not a number: {timing}"));
+        assert!(value.is_finite() && value >= 0.0, "{name}: {timing}");
+        value
+    };
+    let (wall, sim, render, network) = (part("wall"), part("sim"), part("render"), part("network"));
+    assert!(wall > 0.0, "{timing}");
+    assert!(
+        sim + render + network <= wall + CLOCK_SLACK,
+        "sim + render + network exceed the wall time: {timing}"
+    );
+}
+
+/// The results' `timing` summary against every attempt of every run: their count, the mean of
+/// each part, the median wall time, and a total that holds every attempt (they run one after
+/// another inside it).
+fn assert_summary_matches(results: &Value) {
+    let summary = &results["timing"];
+    let attempts: Vec<&Value> = results["runs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .flat_map(|r| r["attempts"].as_array().unwrap())
+        .collect();
+    assert!(!attempts.is_empty());
+    assert_eq!(summary["attempts"], attempts.len(), "{summary}");
+    let of = |name: &str| -> Vec<f64> {
+        attempts
+            .iter()
+            .map(|a| a["timing"][name].as_f64().unwrap())
+            .collect()
+    };
+    let close = |a: f64, b: f64| (a - b).abs() <= CLOCK_SLACK;
+    for name in ["wall", "sim", "render", "network"] {
+        let parts = of(name);
+        let mean = parts.iter().sum::<f64>() / parts.len() as f64;
+        let reported = summary["mean"][name].as_f64().unwrap();
+        assert!(
+            close(reported, mean),
+            "mean {name} {reported} ≠ {mean}: {summary}"
+        );
+    }
+    let mut walls = of("wall");
+    walls.sort_by(f64::total_cmp);
+    let mid = walls.len() / 2;
+    let median = if walls.len() % 2 == 0 {
+        (walls[mid - 1] + walls[mid]) / 2.0
+    } else {
+        walls[mid]
+    };
+    let median_wall = summary["median_wall"].as_f64().unwrap();
+    assert!(
+        close(median_wall, median),
+        "median_wall {median_wall} of {walls:?}"
+    );
+    let total_wall = summary["total_wall"].as_f64().unwrap();
+    assert!(
+        total_wall + CLOCK_SLACK >= walls.iter().sum::<f64>(),
+        "total_wall {total_wall} is less than the attempts' walls {walls:?}"
+    );
+}
+
 /// What an evaluation decided and how each attempt ended, without the timings.
 fn decisions(report: &Value) -> Vec<String> {
     report["results"]["runs"]
@@ -92,7 +163,7 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
 
     let report = read_json(&json);
     assert_eq!(report["schema"], "graspmap.eval/2");
-    assert!(report["git_commit"].is_string());
+    assert_eq!(report["git_commit"], build_commit().as_str());
     assert_eq!(report["config"]["seeds"], serde_json::json!([0]));
     assert_eq!(report["config"]["suppression"]["remember"], 0);
     let results = &report["results"];
@@ -115,11 +186,10 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
         let angle = a["grasp"]["angle_deg"].as_f64().unwrap();
         assert_eq!(angle % 22.5, 0.0, "model angles are bin angles: {a}");
         assert_eq!(a["choice"]["bin"].as_f64().unwrap() * 22.5, angle);
-        for part in ["wall", "sim", "render", "network"] {
-            assert!(a["timing"][part].as_f64().unwrap() >= 0.0, "{part}: {a}");
-        }
+        assert_timing_adds_up(&a["timing"]);
         assert!(a["timing"]["network"].as_f64().unwrap() > 0.0);
     }
+    assert_summary_matches(results);
     for a in 0..3 {
         let vis = setup.path(&format!(
             "affordance/eval_pick_training_vis/YcbTomatoSoupCan_{a}.png"
@@ -271,7 +341,7 @@ fn bad_inputs_are_one_line_errors_with_exit_status_2() {
     assert_user_error(&out, &["--centring", "--collision-check full", "walls"]);
     let out = setup.run(&["eval", "--task", "test", "--verify-floor", "1.5"]);
     assert_user_error(&out, &["1.5", "fraction from 0 to 1"]);
-    // Both options belong to the depth test, which --verify-top 0 turns off.
+    // Both options belong to verification, which --verify-top 0 turns off.
     for (flag, value) in [("--verify-floor", "0.25"), ("--verify-rejected", "50")] {
         let out = setup.run(&["eval", "--task", "test", "--verify-top", "0", flag, value]);
         assert_user_error(&out, &[&format!("{flag} {value}"), "--verify-top 0"]);

@@ -2,7 +2,8 @@
 //!
 //! Each module covers one area end to end: the CLI's outputs and errors, depth input and clutter
 //! labels, evaluation, the mesh importer, labelling, libtorch itself, physics grasps, training,
-//! the run report and videos, and the web pages (over HTTP and in a browser).
+//! the run report and videos, and the web pages (over HTTP and in a browser). `layers` reads
+//! src/ itself: its imports against the layer table in src/lib.rs.
 
 mod browser;
 mod cli;
@@ -11,6 +12,7 @@ mod depth;
 mod eval;
 mod importer;
 mod label;
+mod layers;
 mod libtorch;
 mod physics;
 mod report;

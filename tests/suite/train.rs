@@ -3,11 +3,12 @@
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use graspmap::model::train::{
-    read_checkpoint, save_checkpoint, CheckpointMeta, Plateau, TrainConfig,
-};
+use graspmap::model::checkpoint::{read_checkpoint, save_checkpoint, CheckpointMeta};
+use graspmap::model::config::{Plateau, TrainConfig};
 use graspmap::model::unet::MiniUNet;
 use tch::nn;
+
+use crate::common::{assert_ok, assert_user_error, graspmap};
 
 const BIN: &str = env!("CARGO_BIN_EXE_graspmap");
 
@@ -28,31 +29,20 @@ fn train(data: &Path, args: &[&str]) -> Output {
 }
 
 fn train_in(data: &Path, precision: &str, args: &[&str]) -> Output {
-    Command::new(BIN)
+    train_command(data, precision, args).output().unwrap()
+}
+
+/// `graspmap --data DATA --threads 2 train --batch-size 2 --precision PRECISION ARGS`.
+fn train_command(data: &Path, precision: &str, args: &[&str]) -> Command {
+    let mut command = Command::new(BIN);
+    command
         .arg("--data")
         .arg(data)
         .args(["--threads", "2", "train", "--batch-size", "2"])
         .args(["--precision", precision])
         .args(args)
-        .env_remove("GRASPMAP_LOG")
-        .output()
-        .unwrap()
-}
-
-fn assert_ok(out: &Output) {
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
-}
-
-fn assert_user_error(out: &Output, needle: &str) {
-    let stderr = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{stderr}");
-    assert!(!stderr.contains("panicked"), "{stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "{stderr}");
-    assert!(stderr.contains(needle), "{needle:?} missing from {stderr}");
+        .env_remove("GRASPMAP_LOG");
+    command
 }
 
 fn history(data: &Path, name: &str) -> CheckpointMeta {
@@ -141,22 +131,19 @@ fn bf16_training_also_resumes_exactly() {
         );
     }
     // Resuming in another precision is refused.
-    let out = Command::new(BIN)
-        .arg("--data")
-        .arg(resumed.path())
-        .args([
-            "train",
-            "--batch-size",
-            "2",
-            "--precision",
-            "fp32",
-            "--epochs",
-            "4",
-            "--resume",
-        ])
-        .output()
-        .unwrap();
-    assert_user_error(&out, "--precision bf16");
+    let out = graspmap(&[
+        "--data",
+        resumed.path().to_str().unwrap(),
+        "train",
+        "--batch-size",
+        "2",
+        "--precision",
+        "fp32",
+        "--epochs",
+        "4",
+        "--resume",
+    ]);
+    assert_user_error(&out, &["--precision bf16"]);
 }
 
 #[test]
@@ -183,7 +170,7 @@ fn a_checkpoint_round_trips_bit_exactly() {
     assert_eq!(back, meta);
     let mut restored = nn::VarStore::new(tch::Device::Cpu);
     let _other = MiniUNet::new(&restored.root());
-    graspmap::model::train::load_weights(&mut restored, &tensors, dir.path()).unwrap();
+    graspmap::model::checkpoint::load_weights(&mut restored, &tensors, dir.path()).unwrap();
     let original = vs.variables();
     for (name, tensor) in restored.variables() {
         assert!(tensor.equal(&original[&name]), "{name} changed");
@@ -193,12 +180,12 @@ fn a_checkpoint_round_trips_bit_exactly() {
 #[test]
 fn missing_or_bad_inputs_are_clear_errors() {
     let empty = tempfile::tempdir().unwrap();
-    assert_user_error(&train(empty.path(), &["--epochs", "1"]), "labels.json");
+    assert_user_error(&train(empty.path(), &["--epochs", "1"]), &["labels.json"]);
 
     let data = data_dir();
     assert_user_error(
         &train(data.path(), &["--epochs", "1", "--resume"]),
-        "last.safetensors",
+        &["last.safetensors"],
     );
 
     assert_ok(&train(data.path(), &["--epochs", "1"]));
@@ -210,41 +197,35 @@ fn missing_or_bad_inputs_are_clear_errors() {
     std::fs::write(&last, b"not a tensor file").unwrap();
     assert_user_error(
         &train(data.path(), &["--epochs", "3", "--resume"]),
-        "last.safetensors",
+        &["last.safetensors"],
     );
 
     let image = data.path().join("labels/YcbHammer_1_rgb.png");
     image::RgbImage::new(64, 64).save(&image).unwrap();
     assert_user_error(
         &train(data.path(), &["--epochs", "1"]),
-        "YcbHammer_1_rgb.png",
+        &["YcbHammer_1_rgb.png"],
     );
 
-    assert_user_error(&train(data.path(), &["--epochs", "0"]), "0");
-    let out = Command::new(BIN)
-        .args(["train", "--precision", "fp16"])
-        .output()
-        .unwrap();
-    assert_user_error(&out, "fp16");
-    assert_user_error(&train(data.path(), &["--lr", "-1"]), "-1");
+    assert_user_error(&train(data.path(), &["--epochs", "0"]), &["0"]);
+    let out = graspmap(&["train", "--precision", "fp16"]);
+    assert_user_error(&out, &["fp16"]);
+    assert_user_error(&train(data.path(), &["--lr", "-1"]), &["-1"]);
 }
 
 #[test]
 fn bench_reports_rust_timings_without_the_peer() {
-    let out = Command::new(BIN)
-        .args([
-            "--json",
-            "-",
-            "bench",
-            "train",
-            "--no-peer",
-            "--steps",
-            "2",
-            "--rounds",
-            "1",
-        ])
-        .output()
-        .unwrap();
+    let out = graspmap(&[
+        "--json",
+        "-",
+        "bench",
+        "train",
+        "--no-peer",
+        "--steps",
+        "2",
+        "--rounds",
+        "1",
+    ]);
     assert_ok(&out);
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(report["schema"], "graspmap.bench/1");
@@ -253,25 +234,6 @@ fn bench_reports_rust_timings_without_the_peer() {
     assert!(rust["infer_8_rotations_ms"].as_f64().unwrap() > 0.0);
     assert_eq!(rust["steps"], 2);
     assert!(report["results"]["python"].is_null());
-}
-
-fn train_command(data: &Path, args: &[&str]) -> Command {
-    let mut command = Command::new(BIN);
-    command
-        .arg("--data")
-        .arg(data)
-        .args([
-            "--threads",
-            "2",
-            "train",
-            "--batch-size",
-            "2",
-            "--precision",
-            "fp32",
-        ])
-        .args(args)
-        .env_remove("GRASPMAP_LOG");
-    command
 }
 
 #[test]
@@ -288,8 +250,8 @@ fn a_second_trainer_is_refused_while_the_first_holds_the_store() {
     )
     .unwrap();
     let out = train(data.path(), &["--epochs", "1"]);
-    assert_user_error(&out, ".lock");
-    assert_user_error(&out, &format!("process {}", std::process::id()));
+    let holder = format!("process {}", std::process::id());
+    assert_user_error(&out, &[".lock", &holder]);
     assert!(!affordance.join("last.safetensors").exists());
     drop(lock);
     assert_ok(&train(data.path(), &["--epochs", "1"]));
@@ -300,7 +262,7 @@ fn sigterm_abandons_the_epoch_in_progress_and_resume_stays_exact() {
     let reference = data_dir();
     assert_ok(&train(reference.path(), &["--epochs", "4"]));
     let data = data_dir();
-    let child = train_command(data.path(), &["--epochs", "40"])
+    let child = train_command(data.path(), "fp32", &["--epochs", "40"])
         .stdout(std::process::Stdio::piped())
         .stderr(std::process::Stdio::null())
         .spawn()
@@ -335,12 +297,11 @@ fn a_full_disk_at_any_write_of_an_epoch_fails_clearly_and_leaves_a_resumable_run
     // losses.png and training_vis/001.png, in that order: fail the checkpoint writes and one after.
     for n in [1, 2, 3, 4, 6] {
         let data = data_dir();
-        let out = train_command(data.path(), &["--epochs", "1"])
+        let out = train_command(data.path(), "fp32", &["--epochs", "1"])
             .env("GRASPMAP_TEST_FAIL_WRITE", format!("{n}:eio"))
             .output()
             .unwrap();
-        assert_user_error(&out, "Input/output error");
-        assert_user_error(&out, "affordance");
+        assert_user_error(&out, &["Input/output error", "affordance"]);
         let affordance = data.path().join("affordance");
         let resume = if affordance.join("last.safetensors").exists() {
             // What is there is whole: it reads back.
