@@ -13,8 +13,8 @@ out=data/demo
 mkdir -p "$out"
 SECONDS=0
 "$bin" label --json "$out/label.json"
-if [ -f data/affordance/last.json ]; then resume=(--resume); else resume=(); fi
-"$bin" train --epochs 30 "${resume[@]}" --json "$out/train.json"
+# A rerun continues the model that data/affordance holds (same settings and labels).
+"$bin" train --epochs 30 --json "$out/train.json"
 "$bin" eval --task train --json "$out/eval_train.json"
 "$bin" eval --task test --json "$out/eval_test.json"
 "$bin" eval --task empty_bin --n_past_action 8 --record "$out/empty_bin.mp4" --json "$out/eval_empty_bin.json"

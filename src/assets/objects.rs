@@ -28,11 +28,12 @@ pub struct ObjectModel {
 #[derive(Debug, thiserror::Error)]
 pub enum ObjectError {
     /// No `<dir>/<name>/model.urdf`.
-    #[error("unknown object '{name}': no {path}; known objects: {known}")]
+    #[error("unknown object '{name}'{}; {}", in_library(library), known_list(library, known))]
     Unknown {
         name: String,
-        path: PathBuf,
-        known: String,
+        /// Where the models come from: a directory, or `None` for the bundled ones.
+        library: Option<PathBuf>,
+        known: Vec<String>,
     },
     /// The object's URDF is broken.
     #[error(transparent)]
@@ -43,6 +44,27 @@ pub enum ObjectError {
     /// The split file cannot be read or parsed.
     #[error("split file {path}: {message} (expected {{\"train\": [..], \"test\": [..]}})")]
     Split { path: PathBuf, message: String },
+    /// The split parses but names an object twice or one the library lacks.
+    #[error("split file {path}: {message}")]
+    SplitObjects { path: PathBuf, message: String },
+}
+
+/// " in DIR" for a directory of models; nothing for the bundled ones.
+fn in_library(library: &Option<PathBuf>) -> String {
+    library
+        .as_ref()
+        .map_or_else(String::new, |dir| format!(" in {}", dir.display()))
+}
+
+/// The objects a library knows, or what an empty one lacks.
+fn known_list(library: &Option<PathBuf>, known: &[String]) -> String {
+    match library {
+        Some(dir) if known.is_empty() => format!(
+            "{} holds no objects (each needs <Name>/model.urdf)",
+            dir.display()
+        ),
+        _ => format!("known objects: {}", known.join(", ")),
+    }
 }
 
 /// The bundled objects' folder under assets/.
@@ -105,8 +127,8 @@ impl ObjectLibrary {
         let path = self.location().join(name).join("model.urdf");
         let unknown = || ObjectError::Unknown {
             name: name.to_owned(),
-            path: path.clone(),
-            known: self.names().join(", "),
+            library: self.dir.clone(),
+            known: self.names(),
         };
         if name.is_empty() || name.contains(['/', '\\']) {
             return Err(unknown());
@@ -233,7 +255,42 @@ impl Split {
         if split.train.is_empty() {
             return Err(err("the train list is empty".into()));
         }
+        let mut seen = std::collections::BTreeSet::new();
+        for (list, name) in split
+            .train
+            .iter()
+            .map(|n| ("train", n))
+            .chain(split.test.iter().map(|n| ("test", n)))
+        {
+            if !seen.insert(name) {
+                let both = split.train.contains(name) && split.test.contains(name);
+                return Err(ObjectError::SplitObjects {
+                    path: path.to_owned(),
+                    message: if both {
+                        format!("'{name}' is in both the train and the test list; keep it in one")
+                    } else {
+                        format!("'{name}' is listed twice in the {list} list; keep one")
+                    },
+                });
+            }
+        }
         Ok(split)
+    }
+
+    /// Checks that every object the split names is one the library has.
+    pub(crate) fn check_objects(&self, path: &Path, library: &ObjectLibrary) -> Result<(), ObjectError> {
+        let known = library.names();
+        match self.all().into_iter().find(|n| !known.contains(n)) {
+            None => Ok(()),
+            Some(name) => Err(ObjectError::SplitObjects {
+                path: path.to_owned(),
+                message: format!(
+                    "names '{name}', which is not an object{}; {}",
+                    in_library(&library.dir),
+                    known_list(&library.dir, &known)
+                ),
+            }),
+        }
     }
 
     /// Every object, train first.

@@ -109,7 +109,7 @@ pub(crate) struct BenchTrainArgs {
 /// `graspmap train`.
 #[derive(Debug, Args)]
 pub(crate) struct TrainArgs {
-    /// Epochs to train (30 is usually enough).
+    /// Epochs to train.
     #[arg(long, default_value_t = TrainConfig::default().epochs, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) epochs: u32,
     /// Images per optimiser step.
@@ -121,9 +121,15 @@ pub(crate) struct TrainArgs {
     /// Seed of the 90/10 split, initial weights, data order and augmentation.
     #[arg(long, default_value_t = 0)]
     pub(crate) seed: u64,
-    /// Continue from DATA/affordance/last.* exactly where it stopped.
+    /// Continue from DATA/affordance/last.* exactly where it stopped. Without it, a data dir
+    /// that already holds a model is resumed only when its settings and labels match, and
+    /// refused otherwise.
     #[arg(long)]
     pub(crate) resume: bool,
+    /// Train anew over an existing model; the old best.safetensors (and best.json) are kept as
+    /// best.prev.safetensors (and best.prev.json).
+    #[arg(long, conflicts_with = "resume")]
+    pub(crate) force: bool,
     /// Arithmetic of training.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
     pub(crate) precision: PrecisionChoice,
@@ -244,7 +250,8 @@ pub(crate) struct EvalArgs {
     /// Arithmetic of the network.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
     pub(crate) precision: PrecisionChoice,
-    /// Continue an interrupted sweep: skip the scenes that the --json report already holds.
+    /// Continue an interrupted sweep: skip the scenes that its report already holds (the --json
+    /// file when given, else the copy kept in DATA/reports).
     #[arg(long, conflicts_with = "record")]
     pub(crate) resume: bool,
     /// Check the physics after every step (finite poses, nothing sunk into the totes) and
@@ -548,7 +555,7 @@ pub fn run() -> anyhow::Result<()> {
         Command::Label(args) => commands::label::run(&context, args.config(&data)),
         Command::Train(args) => commands::train::run(&context, args.options()),
         Command::Eval(args) => {
-            let config = args.config(&data, context.json.as_deref())?;
+            let config = args.config(&data)?;
             commands::eval::run(&context, config)
         }
         Command::Predict(args) => commands::predict::run(&context, args.config(&data)),

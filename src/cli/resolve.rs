@@ -57,10 +57,7 @@ fn checkpoint_path(data: &Path, given: Option<PathBuf>) -> PathBuf {
 }
 
 impl EvalArgs {
-    pub(super) fn config(self, data: &Path, json: Option<&Path>) -> anyhow::Result<EvalConfig> {
-        if self.resume && json.is_none_or(|j| j == Path::new("-")) {
-            bail!("--resume continues the report that --json REPORT.json names; give both");
-        }
+    pub(super) fn config(self, data: &Path) -> anyhow::Result<EvalConfig> {
         let model = ModelPolicyConfig {
             check: self.collision_check,
             verify_top: self.verify_top,
@@ -201,6 +198,7 @@ impl TrainArgs {
                 ..TrainConfig::default()
             },
             resume: self.resume,
+            force: self.force,
         }
     }
 }

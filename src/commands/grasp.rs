@@ -6,6 +6,7 @@ use std::time::Instant;
 use anyhow::Context as _;
 
 use super::Context;
+use crate::data::output::check_output_file;
 use crate::data::atomic::save_image_atomic;
 use crate::grasp::draw::draw_grasp;
 use crate::grasp::{world_grasp, PixelGrasp};
@@ -86,6 +87,11 @@ pub(crate) struct GraspResults {
 /// Runs the command.
 pub(crate) fn run(context: &Context, args: GraspConfig) -> anyhow::Result<()> {
     let start = Instant::now();
+    for (path, what) in [(&args.record, "--record"), (&args.image, "--image")] {
+        if let Some(path) = path {
+            check_output_file(path, what)?;
+        }
+    }
     let model = context.objects.load(&args.object)?;
     let config = args.workcell.clone();
     let mut cell = Workcell::new(&config)?;

@@ -53,7 +53,9 @@ impl serde::Serialize for Context {
 impl Context {
     /// The split, read on demand.
     pub(crate) fn split(&self) -> anyhow::Result<Split> {
-        Ok(self.split.read()?)
+        let split = self.split.read()?;
+        split.check_objects(&self.split.location(), &self.objects)?;
+        Ok(split)
     }
 
     /// Prints a human-readable result line: to stdout, unless the JSON report goes there.

@@ -6,6 +6,7 @@ use anyhow::bail;
 use image::RgbImage;
 
 use super::Context;
+use crate::data::output::check_output_file;
 use crate::data::atomic::save_image_atomic;
 use crate::data::input::{read_depth_png, InputKind, NetInput};
 use crate::data::observation::read_observation;
@@ -52,6 +53,7 @@ pub(crate) struct PredictResults {
 
 /// Runs the command.
 pub(crate) fn run(context: &Context, args: PredictConfig) -> anyhow::Result<()> {
+    check_output_file(&args.out, "--out")?;
     let image = read_observation(&args.image)?;
     let checkpoint = &args.checkpoint;
     crate::model::use_threads(context.threads);

@@ -6,6 +6,7 @@ use std::path::PathBuf;
 
 use super::Context;
 use crate::data::labels::LabelStore;
+use crate::data::output::{check_output_dir, check_output_file};
 use crate::present::envelope::write_report;
 use crate::present::report_page::{files_dir, write_report_page};
 use crate::present::web::labels_page::{self, DiskLabels};
@@ -23,6 +24,11 @@ pub(crate) struct ReportConfig {
 
 /// Runs the command.
 pub(crate) fn run(context: &Context, config: ReportConfig) -> anyhow::Result<()> {
+    if config.out.parent() == Some(context.data.as_path()) {
+        check_output_dir(&context.data, "--data")?;
+    }
+    check_output_file(&config.out, "--out")?;
+    check_output_dir(&files_dir(&config.out), "the report's files folder")?;
     let written = write_report_page(&context.data, &config.out)?;
     context.say(&format!(
         "wrote {} and {} files in {}",
@@ -77,5 +83,9 @@ fn serve(context: &Context, out: &std::path::Path, host: IpAddr, port: u16) -> a
         crate::interrupt::requested().is_some()
     });
     context.say("server stopped");
-    Ok(())
+    // Ctrl-C is the only way the server stops: exit as `label --web` does, 128 + the signal.
+    match crate::interrupt::requested() {
+        Some(interrupted) => Err(interrupted.into()),
+        None => Ok(()),
+    }
 }

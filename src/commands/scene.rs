@@ -7,6 +7,7 @@ use anyhow::Context as _;
 use std::path::PathBuf;
 
 use super::Context;
+use crate::data::output::check_output_file;
 use crate::data::atomic::save_image_atomic;
 use crate::present::envelope::write_report;
 use crate::sim::{Workcell, WorkcellConfig};
@@ -45,6 +46,10 @@ struct ObjectResult {
 /// Runs the command.
 pub(crate) fn run(context: &Context, args: SceneConfig) -> anyhow::Result<()> {
     let start = Instant::now();
+    check_output_file(&args.out, "--out")?;
+    if let Some(depth) = &args.depth {
+        check_output_file(depth, "--depth")?;
+    }
     let models = context.objects.load_all(&args.objects)?;
     let config = WorkcellConfig::default();
     let mut cell = Workcell::new(&config)?;

@@ -8,11 +8,12 @@ use anyhow::{bail, Context as _};
 use tch::nn;
 
 use super::Context;
+use crate::data::output::check_output_dir;
 use crate::data::atomic::{save_image_atomic, write_atomic};
 use crate::data::augment::AugmentConfig;
 use crate::data::dataset::{load_dataset, split_train_validation, training_sample, LabelledImage};
 use crate::data::labels::LabelStore;
-use crate::data::lock::StoreLock;
+use crate::data::lock::{LockError, StoreLock};
 use crate::grasp::IMAGE_SIZE;
 use crate::interrupt::{self, Interrupted};
 use crate::model::checkpoint::{
@@ -32,6 +33,8 @@ pub(crate) struct TrainOptions {
     pub(crate) config: TrainConfig,
     /// Continue from DATA/affordance/last.* exactly where it stopped.
     pub(crate) resume: bool,
+    /// Train anew over an existing model, keeping its best as best.prev.*.
+    pub(crate) force: bool,
 }
 
 #[derive(Debug, serde::Serialize)]
@@ -58,11 +61,14 @@ struct Run {
 
 /// Runs the command.
 pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()> {
-    let config = options.config;
+    let config = options.config.clone();
     crate::model::use_threads(context.threads);
     tch::manual_seed(config.seed as i64);
     let store = LabelStore::new(context.data.join("labels"));
-    let images = load_dataset(&store, config.input)?;
+    let images = {
+        let _labels = labels_not_being_written(store.dir())?;
+        load_dataset(&store, config.input)?
+    };
     if images.len() < 2 {
         bail!(
             "{} has {} labels; training needs at least 2 (run graspmap label first)",
@@ -71,8 +77,10 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
         );
     }
     let out_dir = context.data.join("affordance");
+    check_output_dir(&out_dir.join("training_vis"), "the model folder")?;
     let _writer = StoreLock::acquire(&out_dir, "train")?;
-    let mut run = start(&config, &out_dir, images.len(), options.resume)?;
+    let resume = resume_or_refuse(context, &options, &out_dir, images.len())?;
+    let mut run = start(&config, &out_dir, images.len(), resume)?;
     if run.meta.epoch >= config.epochs {
         context.say(&format!(
             "already trained {} epochs (--epochs {}); nothing to do",
@@ -142,9 +150,124 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
             "global": context,
             "train": config,
             "augment": augment,
-            "resume": options.resume,
+            "resume": resume,
+            "force": options.force,
         });
         write_report(json, "train", config.seed, &resolved, &results)?;
+    }
+    Ok(())
+}
+
+/// Holds the labels' lock while the dataset is read, so that training never starts on a
+/// dataset that a running `graspmap label` is still appending to. A labels folder that cannot
+/// be locked for another reason (a read-only copy, say) cannot be written by `label` either.
+fn labels_not_being_written(dir: &Path) -> anyhow::Result<Option<StoreLock>> {
+    if !dir.is_dir() {
+        return Ok(None);
+    }
+    match StoreLock::acquire(dir, "label") {
+        Ok(lock) => Ok(Some(lock)),
+        Err(held @ LockError::Held { .. }) => Err(anyhow::Error::new(held)
+            .context("training needs the finished labels; wait for the labelling run to end")),
+        Err(LockError::Io { .. }) => Ok(None),
+    }
+}
+
+/// Whether training continues the run in `out_dir`: with `--resume`, always; with `--force`,
+/// never (the old best is kept as best.prev.*); otherwise only when the model there was
+/// trained with the same settings on the same number of labels, and a refusal that names both
+/// ways forward when not.
+fn resume_or_refuse(
+    context: &Context,
+    options: &TrainOptions,
+    out_dir: &Path,
+    n_images: usize,
+) -> anyhow::Result<bool> {
+    let best = out_dir.join("best.safetensors");
+    let last = out_dir.join("last.safetensors");
+    if options.resume {
+        return Ok(true);
+    }
+    if !best.exists() && !last.exists() {
+        return Ok(false);
+    }
+    if options.force {
+        keep_previous_best(out_dir)?;
+        context.say(&format!(
+            "--force: training anew; the previous best model is kept as {}",
+            out_dir.join("best.prev.safetensors").display()
+        ));
+        return Ok(false);
+    }
+    let why = match read_checkpoint(out_dir, "last") {
+        Ok((_, meta)) => match resumable(&meta, &options.config, n_images) {
+            Ok(()) => {
+                context.say(&format!(
+                    "resuming {} at epoch {} (same settings and labels; --force trains anew)",
+                    last.display(),
+                    meta.epoch
+                ));
+                return Ok(true);
+            }
+            Err(why) => why,
+        },
+        Err(e) => format!("has no readable training state ({e:#})"),
+    };
+    bail!(
+        "{} already holds a trained model, and {} {why}; pass --resume to continue it, or --force to train anew (the old best is kept as best.prev.safetensors)",
+        best.display(),
+        last.display()
+    )
+}
+
+/// Why the run a checkpoint holds cannot continue with `config` on `n_images` labels.
+fn resumable(meta: &CheckpointMeta, config: &TrainConfig, n_images: usize) -> Result<(), String> {
+    let saved = &meta.config;
+    if saved.seed != config.seed
+        || saved.batch_size != config.batch_size
+        || saved.lr != config.lr
+        || saved.precision != config.precision
+        || saved.input != config.input
+    {
+        return Err(format!(
+            "was trained with --seed {} --batch-size {} --lr {} --precision {} --input {}",
+            saved.seed,
+            saved.batch_size,
+            saved.lr,
+            saved.precision.name(),
+            saved.input
+        ));
+    }
+    let known = meta.train_indices.len() + meta.val_indices.len();
+    if known != n_images {
+        return Err(format!(
+            "was trained on {known} labels, and the labels folder holds {n_images} now"
+        ));
+    }
+    Ok(())
+}
+
+/// Moves best.* to best.prev.* (replacing an older pair) and drops the abandoned run's
+/// resume state, last.*.
+fn keep_previous_best(out_dir: &Path) -> anyhow::Result<()> {
+    for (from, to) in [
+        ("best.safetensors", "best.prev.safetensors"),
+        ("best.json", "best.prev.json"),
+    ] {
+        let from = out_dir.join(from);
+        if from.exists() {
+            let to = out_dir.join(to);
+            std::fs::rename(&from, &to).with_context(|| {
+                format!("keeping {} as {}", from.display(), to.display())
+            })?;
+        }
+    }
+    for name in ["last.safetensors", "last.json"] {
+        let path = out_dir.join(name);
+        if path.exists() {
+            std::fs::remove_file(&path)
+                .with_context(|| format!("removing {}", path.display()))?;
+        }
     }
     Ok(())
 }
@@ -182,30 +305,10 @@ fn start(
         });
     }
     let (tensors, mut meta) = read_checkpoint(out_dir, "last")?;
-    let saved = &meta.config;
-    if saved.seed != config.seed
-        || saved.batch_size != config.batch_size
-        || saved.lr != config.lr
-        || saved.precision != config.precision
-        || saved.input != config.input
-    {
+    if let Err(why) = resumable(&meta, config, n_images) {
         bail!(
-            "{} was trained with --seed {} --batch-size {} --lr {} --precision {} --input {}; resume with the same values",
-            out_dir.join("last.json").display(),
-            saved.seed,
-            saved.batch_size,
-            saved.lr,
-            saved.precision.name(),
-            saved.input
-        );
-    }
-    let known = meta.train_indices.len() + meta.val_indices.len();
-    if known != n_images {
-        bail!(
-            "the labels changed since {} ({} images then, {} now); train from scratch",
-            out_dir.join("last.json").display(),
-            known,
-            n_images
+            "{} {why}; resume with the same settings and labels, or train anew with --force",
+            out_dir.join("last.json").display()
         );
     }
     load_weights(&mut vs, &tensors, &out_dir.join("last.safetensors"))?;

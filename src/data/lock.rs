@@ -32,12 +32,15 @@ pub enum LockError {
         command: &'static str,
     },
     /// The lock file cannot be opened or locked.
-    #[error("cannot lock {}: {source}", path.display())]
+    #[error(
+        "cannot write {dir} ({reason}); make it writable, or choose another --data",
+        dir = path.parent().unwrap_or(Path::new(".")).display()
+    )]
     Io {
         /// The lock file.
         path: PathBuf,
-        /// What the system said.
-        source: std::io::Error,
+        /// What the system said, without its error code.
+        reason: String,
     },
 }
 
@@ -51,9 +54,9 @@ impl StoreLock {
     /// Takes the store's lock at once, or says who holds it; `command` names the writer.
     pub fn acquire(dir: &Path, command: &'static str) -> Result<Self, LockError> {
         let path = dir.join(LOCK_FILE);
-        let io = |source| LockError::Io {
+        let io = |e: std::io::Error| LockError::Io {
             path: path.clone(),
-            source,
+            reason: crate::data::output::reason(&e),
         };
         std::fs::create_dir_all(dir).map_err(io)?;
         let mut file = OpenOptions::new()

@@ -17,4 +17,5 @@ pub mod input;
 pub mod labels;
 pub mod lock;
 pub(crate) mod observation;
+pub(crate) mod output;
 pub(crate) mod relabel;

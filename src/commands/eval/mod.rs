@@ -9,6 +9,7 @@ use anyhow::{bail, Context as _};
 use image::RgbImage;
 
 use super::Context;
+use crate::data::output::{check_output_dir, check_output_file};
 use crate::assets::objects::ObjectModel;
 use crate::data::atomic::save_image_atomic;
 use crate::grasp::draw::draw_grasp;
@@ -98,10 +99,17 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         Task::Test => "eval_pick_testing_vis",
         Task::EmptyBin => "eval_empty_bin_vis",
     });
+    let kept = kept_report_path(&context.data, config.task, config.policy);
+    check_output_dir(kept.parent().unwrap_or(&context.data), "the reports folder")?;
+    check_output_dir(&vis_dir, "the visualisations folder")?;
+    if let Some(record) = &config.record {
+        check_output_file(record, "--record")?;
+    }
     let per_scene = match config.task {
         Task::EmptyBin => u64::from(config.max_attempts),
         _ => models.len() as u64 * u64::from(ATTEMPTS_PER_OBJECT),
     };
+    announce_plan(context, config.task, per_scene, seeds.len());
     let mut evaluation = Evaluation {
         context,
         policy,
@@ -115,9 +123,10 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         check_invariants: config.check_invariants,
     };
 
-    let mut runs = match (&context.json, config.resume) {
-        (Some(report), true) => finished_runs(report, &config)?,
-        _ => Vec::new(),
+    let mut runs = if config.resume {
+        finished_runs(resume_source(context, &kept), &config)?
+    } else {
+        Vec::new()
     };
     evaluation.bar.inc(per_scene * runs.len() as u64);
     let mut interrupted = None;
@@ -228,25 +237,66 @@ fn keep_interrupted(
             elapsed,
             true,
         );
-        match &context.json {
-            Some(json) if json != Path::new("-") => {
-                let resolved = resolved_config(context, config, names);
-                write_versioned_report(json, "eval", 2, seeds[0], &resolved, &results)?;
-                context.say(&format!(
-                    "{interrupted}: {kept} kept in {}; rerun with --resume to finish the rest",
-                    json.display()
-                ));
-            }
-            _ => context.say(&format!(
-                "{interrupted}: {kept} finished; pass --json REPORT.json to keep them and --resume to continue"
-            )),
+        // The finished scenes always stay under DATA/reports, where `--resume` finds them, and
+        // in the user's own --json copy when there is one.
+        let resolved = resolved_config(context, config, names);
+        let kept_path = kept_report_path(&context.data, config.task, config.policy);
+        let own = context.json.as_ref().filter(|j| *j != Path::new("-"));
+        for target in own.into_iter().chain(std::iter::once(&kept_path)) {
+            write_versioned_report(target, "eval", 2, seeds[0], &resolved, &results)?;
         }
+        let place = own.unwrap_or(&kept_path);
+        context.say(&format!(
+            "{interrupted}: {kept} kept in {}; rerun the same command with --resume to finish the rest",
+            place.display()
+        ));
         Ok(())
     })();
     match written {
         Ok(()) => interrupted.into(),
         Err(e) => e,
     }
+}
+
+/// The report `--resume` continues: the user's `--json` file when there is one, else the copy
+/// kept under DATA/reports.
+fn resume_source<'a>(context: &'a Context, kept: &'a Path) -> &'a Path {
+    match context.json.as_deref() {
+        Some(json) if json != Path::new("-") => json,
+        _ => kept,
+    }
+}
+
+/// Typical wall seconds of one attempt on a 2-core machine, for the estimate printed before a
+/// long sweep (BENCHMARKS.md#attempt-latency): empty_bin attempts render, check and settle a
+/// full bin.
+fn typical_attempt_seconds(task: Task) -> f64 {
+    match task {
+        Task::EmptyBin => 0.8,
+        Task::Train | Task::Test => 0.4,
+    }
+}
+
+/// Says how many attempts a sweep plans and, when it will take more than about a minute, how
+/// long it should take.
+fn announce_plan(context: &Context, task: Task, per_scene: u64, scenes: usize) {
+    let attempts = per_scene * scenes as u64;
+    let seconds = attempts as f64 * typical_attempt_seconds(task);
+    if context.quiet || seconds < 60.0 {
+        return;
+    }
+    let hours = seconds / 3600.0;
+    let estimate = if hours >= 1.0 {
+        format!("{hours:.1} h")
+    } else {
+        format!("{:.0} min", seconds / 60.0)
+    };
+    eprintln!(
+        "eval: {scenes} scene{} of up to {per_scene} attempts, {attempts} in all: about {estimate} \
+         at {} s an attempt; Ctrl-C keeps the finished scenes, --resume continues",
+        if scenes == 1 { "" } else { "s" },
+        typical_attempt_seconds(task)
+    );
 }
 
 /// The policy that chooses the grasps, with its model loaded when it needs one.

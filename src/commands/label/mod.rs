@@ -14,6 +14,7 @@ use std::time::Instant;
 use anyhow::bail;
 
 use super::Context;
+use crate::data::output::check_output_dir;
 use crate::assets::objects::ObjectModel;
 use crate::data::clicks::read_clicks;
 use crate::data::labels::{Label, LabelStore, Labels, Progress};
@@ -120,6 +121,7 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     if args.backfill_depth {
         return backfill::backfill_depth(context, &store).map(|_| ());
     }
+    check_output_dir(store.dir(), "the labels folder")?;
     let _writer = StoreLock::acquire(store.dir(), "label")?;
     if let Some((object, k)) = &args.delete {
         return delete(context, &store, object, *k);

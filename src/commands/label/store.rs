@@ -57,6 +57,52 @@ pub(super) fn writes_depth(store: &LabelStore, labels: &Labels) -> bool {
     all
 }
 
+/// What a labelling run would refuse in progress.json, against the stored labels: a file that
+/// does not parse, another schema, or label counts that differ by more than the one label a
+/// kill between the two writes leaves uncounted.
+fn progress_problems(store: &LabelStore) -> Vec<String> {
+    let path = store.dir().join(crate::data::labels::PROGRESS_FILE);
+    let progress = match store.load_progress() {
+        Ok(Some(progress)) => progress,
+        Ok(None) => return Vec::new(),
+        Err(e) => return vec![format!("{e:#}")],
+    };
+    let mut problems = Vec::new();
+    if progress.schema != Progress::SCHEMA {
+        problems.push(format!(
+            "{}: schema '{}', expected '{}' (label --force starts over)",
+            path.display(),
+            progress.schema,
+            Progress::SCHEMA
+        ));
+    }
+    let Ok(labels) = store.load() else {
+        return problems;
+    };
+    let objects: std::collections::BTreeSet<&str> = labels
+        .iter()
+        .map(|(object, _)| object)
+        .chain(progress.rounds.iter().map(|p| p.object.as_str()))
+        .collect();
+    for object in objects {
+        let (rounds, recorded) = progress.entry(object);
+        let stored = labels.of(object).len() as u32;
+        if stored != recorded && stored != recorded + 1 {
+            problems.push(format!(
+                "{}: {object} has {stored} labels but progress.json records {recorded} (label --force starts over)",
+                store.dir().display()
+            ));
+        }
+        if rounds < recorded {
+            problems.push(format!(
+                "{}: {object} records {recorded} labels from only {rounds} rounds (label --force starts over)",
+                path.display()
+            ));
+        }
+    }
+    problems
+}
+
 /// Where to continue: the rounds already run per object, from progress.json.
 fn resume_point(
     store: &LabelStore,
@@ -157,8 +203,11 @@ pub(super) fn delete(
 
 /// `label --check`: every problem on stdout, then exit 2 if there was any.
 pub(super) fn check(context: &Context, store: &LabelStore, known: &[String]) -> anyhow::Result<()> {
+    // The split is what a labelling run reads first: check it as that run would.
+    context.split()?;
     let mut problems = store.check(known);
     problems.extend(check_depth_files(store));
+    problems.extend(progress_problems(store));
     for problem in &problems {
         context.say(problem);
     }
