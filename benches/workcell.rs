@@ -6,7 +6,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use graspmap::assets::objects::{ObjectLibrary, SplitFile};
-use graspmap::grasp::world_grasp;
+use graspmap::grasp::world::world_grasp;
 use graspmap::policy::oracle;
 use graspmap::policy::verify::CheckConfig;
 use graspmap::sim::Workcell;

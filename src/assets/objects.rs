@@ -28,7 +28,11 @@ pub struct ObjectModel {
 #[derive(Debug, thiserror::Error)]
 pub enum ObjectError {
     /// No `<dir>/<name>/model.urdf`.
-    #[error("unknown object '{name}'{}; {}", in_library(library), known_list(library, known))]
+    #[error(
+        "unknown object '{name}'{}; {}",
+        in_library(library),
+        known_list(library, known)
+    )]
     Unknown {
         name: String,
         /// Where the models come from: a directory, or `None` for the bundled ones.
@@ -278,7 +282,11 @@ impl Split {
     }
 
     /// Checks that every object the split names is one the library has.
-    pub(crate) fn check_objects(&self, path: &Path, library: &ObjectLibrary) -> Result<(), ObjectError> {
+    pub(crate) fn check_objects(
+        &self,
+        path: &Path,
+        library: &ObjectLibrary,
+    ) -> Result<(), ObjectError> {
         let known = library.names();
         match self.all().into_iter().find(|n| !known.contains(n)) {
             None => Ok(()),

@@ -6,10 +6,11 @@ use std::time::Instant;
 use anyhow::Context as _;
 
 use super::Context;
-use crate::data::output::check_output_file;
 use crate::data::atomic::save_image_atomic;
+use crate::data::output::check_output_file;
 use crate::grasp::draw::draw_grasp;
-use crate::grasp::{world_grasp, PixelGrasp};
+use crate::grasp::world::world_grasp;
+use crate::grasp::PixelGrasp;
 use crate::named::Named;
 use crate::policy::baselines::random_grasp;
 use crate::policy::oracle;

@@ -6,10 +6,10 @@ use anyhow::bail;
 use image::RgbImage;
 
 use super::Context;
-use crate::data::output::check_output_file;
 use crate::data::atomic::save_image_atomic;
 use crate::data::input::{read_depth_png, InputKind, NetInput};
 use crate::data::observation::read_observation;
+use crate::data::output::check_output_file;
 use crate::model::inference::{AffordanceModel, Scored};
 use crate::model::maps::{visualisation, Choice};
 use crate::model::unet::Precision;

@@ -7,8 +7,8 @@ use anyhow::Context as _;
 use std::path::PathBuf;
 
 use super::Context;
-use crate::data::output::check_output_file;
 use crate::data::atomic::save_image_atomic;
+use crate::data::output::check_output_file;
 use crate::present::envelope::write_report;
 use crate::sim::{Workcell, WorkcellConfig};
 

@@ -8,12 +8,12 @@ use anyhow::{bail, Context as _};
 use tch::nn;
 
 use super::Context;
-use crate::data::output::check_output_dir;
 use crate::data::atomic::{save_image_atomic, write_atomic};
 use crate::data::augment::AugmentConfig;
 use crate::data::dataset::{load_dataset, split_train_validation, training_sample, LabelledImage};
 use crate::data::labels::LabelStore;
 use crate::data::lock::{LockError, StoreLock};
+use crate::data::output::check_output_dir;
 use crate::grasp::IMAGE_SIZE;
 use crate::interrupt::{self, Interrupted};
 use crate::model::checkpoint::{
@@ -257,16 +257,14 @@ fn keep_previous_best(out_dir: &Path) -> anyhow::Result<()> {
         let from = out_dir.join(from);
         if from.exists() {
             let to = out_dir.join(to);
-            std::fs::rename(&from, &to).with_context(|| {
-                format!("keeping {} as {}", from.display(), to.display())
-            })?;
+            std::fs::rename(&from, &to)
+                .with_context(|| format!("keeping {} as {}", from.display(), to.display()))?;
         }
     }
     for name in ["last.safetensors", "last.json"] {
         let path = out_dir.join(name);
         if path.exists() {
-            std::fs::remove_file(&path)
-                .with_context(|| format!("removing {}", path.display()))?;
+            std::fs::remove_file(&path).with_context(|| format!("removing {}", path.display()))?;
         }
     }
     Ok(())

@@ -12,8 +12,6 @@ pub(crate) mod rotate;
 pub mod tote;
 pub mod world;
 
-pub use world::{world_grasp, WorldGrasp};
-
 /// Side length of the camera image and of every label image (px).
 pub(crate) const IMAGE_SIZE: u32 = 128;
 /// Number of angle bins over the half turn.

@@ -12,7 +12,8 @@ use rapier3d::math::Vector;
 
 use super::heights::HeightMap;
 use crate::grasp::gripper::GRIPPER;
-use crate::grasp::{world_grasp, PixelGrasp, WorldGrasp};
+use crate::grasp::world::{world_grasp, WorldGrasp};
+use crate::grasp::PixelGrasp;
 use crate::named::{named_enum, Named};
 use crate::vision::camera::Camera;
 use crate::vision::render::Frame;

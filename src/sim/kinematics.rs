@@ -86,18 +86,6 @@ pub(crate) struct Ur5 {
     pub(crate) d6: f64,
 }
 
-impl Default for Ur5 {
-    /// Standard UR5 with its base frame at the workcell's [`super::ROBOT_BASE`], unrotated.
-    fn default() -> Self {
-        let base = super::ROBOT_BASE;
-        Self::new(Isometry3::translation(
-            base.x.into(),
-            base.y.into(),
-            base.z.into(),
-        ))
-    }
-}
-
 impl Ur5 {
     /// Standard UR5 with its base frame at `base` in the world.
     pub(crate) fn new(base: Isometry3<f64>) -> Self {
@@ -492,7 +480,8 @@ mod tests {
     use rand_chacha::ChaCha8Rng;
 
     fn ur5() -> Ur5 {
-        Ur5::default()
+        let base = rapier3d::math::Pose::from_translation(crate::sim::ROBOT_BASE);
+        Ur5::new(crate::sim::pick::to_isometry(&base))
     }
 
     fn pose_errors(a: &Isometry3<f64>, b: &Isometry3<f64>) -> (f64, f64) {

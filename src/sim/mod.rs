@@ -25,13 +25,19 @@ use crate::vision::render::{Drawable, Shape};
 use penetration::penetration;
 use robot::{groups, Arm, Gripper};
 use shapes::shared_shape;
-use stepping::configure_solver;
 
 /// Physics rate (Hz). 240 Hz kept thin fingers from tunnelling through small objects.
 pub(crate) const PHYSICS_HZ: f32 = 240.0;
 
 /// Robot base position on top of the pedestal.
 pub(crate) const ROBOT_BASE: Vector = Vector::new(0.0, 0.0, 0.4);
+
+/// Parts a step is split into while the arm is held and an object moves faster than
+/// `stepping::FAST_OBJECT_SPEED`. An object dropped 0.2–0.7 m lands at 2–3.7 m/s, 8–15 mm per step, and
+/// a landing (or a drill landing on a thin clamp) left an object 5–10 mm inside the floor for a
+/// step or two: 15 times in the drops of the soak's 200 scenes. With quarter steps there were
+/// none; halves left 3, and quarters only above 0.5 m/s left 1 (BENCHMARKS.md#physics-soak).
+pub(crate) const FAST_SUBSTEPS: u32 = 4;
 const PEDESTAL_RADIUS: f32 = 0.0734;
 /// How far below a tote's floor top an object's centre may be and still count as inside (m).
 const LOCATE_BELOW_FLOOR: f32 = 0.01;
@@ -153,7 +159,7 @@ impl Workcell {
             violations: None,
             phase: "idle",
             arm_held: true,
-            fast_substeps: stepping::FAST_SUBSTEPS,
+            fast_substeps: FAST_SUBSTEPS,
         })
     }
 
@@ -492,6 +498,29 @@ fn build_scenery(world: &mut PhysicsWorld) -> (Vec<Drawable>, Vec<ColliderHandle
         id: 0,
     });
     (scenery, environment)
+}
+
+/// Solver settings the grasps depend on.
+fn configure_solver(world: &mut PhysicsWorld) {
+    world.gravity = Vector::new(0.0, 0.0, -9.8);
+    let p = &mut world.integration_parameters;
+    p.dt = 1.0 / PHYSICS_HZ;
+    p.friction_model = FrictionModel::Coulomb;
+    // The default recycling distance (5 cm) lets fingers pass through small objects.
+    p.normalized_contact_recycle_distance = 0.001;
+    p.contact_softness = SpringCoefficients::new(120.0, 10.0);
+    // Contacts with the fixed totes and ground. Rapier's default (60 Hz) is tuned for 60 Hz
+    // steps and is softer than the contacts above: a finger coming down on an object pushed it
+    // 5–50 mm into the floor before the protective stop, and objects under a load stayed 5 mm
+    // deep for seconds. At 480 Hz the floor wins that squeeze and the finger's contact gives.
+    p.static_contact_softness = SpringCoefficients::new(480.0, 10.0);
+    p.num_solver_iterations = 8;
+    // Rapier merges manifolds that share a normal into one cluster before solving them. Against
+    // the floor and walls, clusters let a dropped hammer land 5–7 mm into the empty floor, and
+    // held a mustard bottle resting by a wall between two of that wall's clusters with opposite
+    // normals, each pushing 12 N·s a step, until one let go and the bottle shot off at 1.7 m/s,
+    // 10.9 mm deep. Without clustering the soak found neither (BENCHMARKS.md#physics-soak).
+    p.contact_clustering = false;
 }
 
 #[cfg(test)]

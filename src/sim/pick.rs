@@ -9,7 +9,7 @@ use rapier3d::math::{Pose, Rotation, Vector};
 use super::guard::{CollisionStop, Guard, CREEP_GAP, CREEP_RATE};
 use super::{in_contact, ObjectLocation, Workcell, PHYSICS_HZ};
 use crate::grasp::gripper::GRIPPER;
-use crate::grasp::WorldGrasp;
+use crate::grasp::world::WorldGrasp;
 use crate::named::named_enum;
 use crate::sim::kinematics::{
     IkError, JointTrajectory, Joints, TrapezoidProfile, Ur5, HOME_JOINTS, PLACE_JOINTS,

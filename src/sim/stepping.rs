@@ -1,7 +1,5 @@
-//! How the workcell advances time: the solver's settings, one step (split while an object falls
-//! fast), holding the arm, and settling.
-
-use rapier3d::prelude::*;
+//! How the workcell advances time: one step (split while an object falls fast), holding the
+//! arm, and settling. The solver's settings are set once, in [`super::Workcell::new`].
 
 use super::penetration::DropMisfiredContacts;
 use super::{Workcell, PHYSICS_HZ};
@@ -14,37 +12,8 @@ const SETTLED_STEPS: u32 = 60;
 const STILL_LINEAR_SPEED: f32 = 0.005;
 /// See [`STILL_LINEAR_SPEED`] (rad/s).
 const STILL_ANGULAR_SPEED: f32 = 0.05;
-/// Parts a step is split into while the arm is held and an object moves faster than
-/// [`FAST_OBJECT_SPEED`]. An object dropped 0.2–0.7 m lands at 2–3.7 m/s, 8–15 mm per step, and
-/// a landing (or a drill landing on a thin clamp) left an object 5–10 mm inside the floor for a
-/// step or two: 15 times in the drops of the soak's 200 scenes. With quarter steps there were
-/// none; halves left 3, and quarters only above 0.5 m/s left 1 (BENCHMARKS.md#physics-soak).
-pub(super) const FAST_SUBSTEPS: u32 = 4;
 /// See [`FAST_SUBSTEPS`] (m/s).
 const FAST_OBJECT_SPEED: f32 = 0.3;
-
-/// Solver settings the grasps depend on.
-pub(super) fn configure_solver(world: &mut PhysicsWorld) {
-    world.gravity = Vector::new(0.0, 0.0, -9.8);
-    let p = &mut world.integration_parameters;
-    p.dt = 1.0 / PHYSICS_HZ;
-    p.friction_model = FrictionModel::Coulomb;
-    // The default recycling distance (5 cm) lets fingers pass through small objects.
-    p.normalized_contact_recycle_distance = 0.001;
-    p.contact_softness = SpringCoefficients::new(120.0, 10.0);
-    // Contacts with the fixed totes and ground. Rapier's default (60 Hz) is tuned for 60 Hz
-    // steps and is softer than the contacts above: a finger coming down on an object pushed it
-    // 5–50 mm into the floor before the protective stop, and objects under a load stayed 5 mm
-    // deep for seconds. At 480 Hz the floor wins that squeeze and the finger's contact gives.
-    p.static_contact_softness = SpringCoefficients::new(480.0, 10.0);
-    p.num_solver_iterations = 8;
-    // Rapier merges manifolds that share a normal into one cluster before solving them. Against
-    // the floor and walls, clusters let a dropped hammer land 5–7 mm into the empty floor, and
-    // held a mustard bottle resting by a wall between two of that wall's clusters with opposite
-    // normals, each pushing 12 N·s a step, until one let go and the bottle shot off at 1.7 m/s,
-    // 10.9 mm deep. Without clustering the soak found neither (BENCHMARKS.md#physics-soak).
-    p.contact_clustering = false;
-}
 
 impl Workcell {
     /// Advances physics by one step of `1 / PHYSICS_HZ`, in [`FAST_SUBSTEPS`] parts while the arm
@@ -124,7 +93,7 @@ impl Workcell {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sim::WorkcellConfig;
+    use crate::sim::{WorkcellConfig, FAST_SUBSTEPS};
 
     /// Drops all 15 objects with `seed`, stepping fast motion in `parts`; the invariant violations.
     fn drop_violations(seed: u64, parts: u32) -> Vec<String> {

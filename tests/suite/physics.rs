@@ -8,8 +8,8 @@ use graspmap::grasp::world::{
     closing_direction, image_angle, world_grasp, WorldGrasp, DEPTH_BELOW_SURFACE, MIN_TCP_HEIGHT,
 };
 use graspmap::grasp::PixelGrasp;
-use graspmap::policy::oracle;
 use graspmap::policy::heights::HeightMap;
+use graspmap::policy::oracle;
 use graspmap::policy::verify::{CheckConfig, Verifier};
 use graspmap::sim::pick::{PickOutcome, PickReason};
 use graspmap::sim::{ObjectLocation, Workcell};
@@ -338,7 +338,7 @@ fn unreachable_target_is_a_failed_attempt_not_a_crash() {
         "YcbTennisBall",
         Pose::from_translation(Vector::new(0.5, 0.0, FLOOR_TOP + 0.033)),
     );
-    let grasp = graspmap::grasp::WorldGrasp {
+    let grasp = graspmap::grasp::world::WorldGrasp {
         tcp: Vector::new(1.6, 0.0, 0.05),
         closing: Vector::X,
     };

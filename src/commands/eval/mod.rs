@@ -9,11 +9,11 @@ use anyhow::{bail, Context as _};
 use image::RgbImage;
 
 use super::Context;
-use crate::data::output::{check_output_dir, check_output_file};
 use crate::assets::objects::ObjectModel;
 use crate::data::atomic::save_image_atomic;
+use crate::data::output::{check_output_dir, check_output_file};
 use crate::grasp::draw::draw_grasp;
-use crate::grasp::world_grasp;
+use crate::grasp::world::world_grasp;
 use crate::interrupt;
 use crate::model::inference::AffordanceModel;
 use crate::model::unet::Precision;

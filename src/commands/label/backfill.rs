@@ -10,7 +10,7 @@
 use anyhow::{bail, Context as _};
 
 use super::rounds::{round_scene, round_seed};
-use super::Context;
+use crate::commands::Context;
 use crate::data::labels::{LabelStore, PROGRESS_FILE};
 use crate::data::lock::StoreLock;
 

@@ -10,7 +10,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 
-use super::LabelConfig;
+use super::config::LabelConfig;
 use crate::data::atomic::save_image_atomic;
 use crate::data::labels::{Label, Labels, Progress};
 use crate::grasp::draw::draw_grasp;

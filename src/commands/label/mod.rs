@@ -2,11 +2,11 @@
 
 mod backfill;
 mod clicks;
+mod config;
 mod rounds;
 mod store;
 mod web;
 
-use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
@@ -14,76 +14,22 @@ use std::time::Instant;
 use anyhow::bail;
 
 use super::Context;
-use crate::data::output::check_output_dir;
 use crate::assets::objects::ObjectModel;
 use crate::data::clicks::read_clicks;
 use crate::data::labels::{Label, LabelStore, Labels, Progress};
 use crate::data::lock::StoreLock;
-use crate::grasp::world_grasp;
+use crate::data::output::check_output_dir;
+use crate::grasp::world::world_grasp;
 use crate::interrupt;
 use crate::metrics::FailureTally;
 use crate::named::Named;
 use crate::present::envelope::write_report;
-use crate::present::web::session::{AttemptView, LabelSession};
+use crate::present::web::session::{pad_width_px, AttemptView, LabelSession, FILM_EVERY_STEPS};
 use crate::present::web::WebServer;
 use crate::sim::pick::PickReason;
 use clicks::Clicker;
+pub(crate) use config::{ClickNoise, ClickSource, LabelConfig};
 use store::{check, delete, prepare, writes_depth};
-
-/// One `graspmap label` run, resolved by the CLI.
-#[derive(Debug, Clone)]
-pub(crate) struct LabelConfig {
-    /// Successful labels wanted per training object. Default 12.
-    pub(crate) per_object: u32,
-    /// Rounds allowed per object before giving up on it. Default 40.
-    pub(crate) max_rounds: u32,
-    /// Base seed: round r of training object j drops with seed + 100·j + r. Default 0.
-    pub(crate) seed: u64,
-    /// Where clicks come from.
-    pub(crate) source: ClickSource,
-    /// Scripted clicks' human-like noise.
-    pub(crate) noise: ClickNoise,
-    /// Delete existing labels first.
-    pub(crate) force: bool,
-    /// Only validate the existing dataset.
-    pub(crate) check: bool,
-    /// Only delete this label (object, k from 1), renumbering the object's later ones.
-    pub(crate) delete: Option<(String, usize)>,
-    /// Objects dropped per round: the round's object and `clutter` − 1 others. Default 1.
-    pub(crate) clutter: u32,
-    /// Only write the depth files that an older dataset lacks.
-    pub(crate) backfill_depth: bool,
-}
-
-/// Where a round's click comes from.
-#[derive(Debug, Clone, PartialEq)]
-pub(crate) enum ClickSource {
-    /// The oracle planner in 22.5° steps, with [`ClickNoise`].
-    Scripted,
-    /// A JSON list of {"object", "x", "y", "angle"}, one per round.
-    File(PathBuf),
-    /// A person at stdin; the preview image goes to this path.
-    Interactive {
-        /// Where the image with the cursor's grasp is written.
-        preview: PathBuf,
-    },
-    /// A person at a page in the browser, served on this address (port 0: any free one).
-    Web {
-        /// The address to bind.
-        host: std::net::IpAddr,
-        /// The port; 0 picks a free one.
-        port: u16,
-    },
-}
-
-/// Standard deviations of the scripted clicker's noise.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub(crate) struct ClickNoise {
-    /// Of the click position, in pixels.
-    pub(crate) px: f32,
-    /// Of the angle, in degrees (before snapping to 22.5°).
-    pub(crate) deg: f32,
-}
 
 /// One object's tally.
 #[derive(Debug, Default, Clone, serde::Serialize)]
@@ -285,7 +231,7 @@ fn clicker(args: &LabelConfig, train: &[String]) -> anyhow::Result<Clicker> {
         ClickSource::Web { host, port } => {
             let server = WebServer::bind(*host, *port)?;
             let session =
-                LabelSession::new(web::pad_width_px(&crate::vision::camera::Camera::top_down()));
+                LabelSession::new(pad_width_px(&crate::vision::camera::Camera::top_down()));
             Clicker::Web {
                 server: Box::new(server),
                 session: Box::new(session),
@@ -464,7 +410,7 @@ impl ObjectJob<'_> {
         };
         let filmed = matches!(self.clicker, Clicker::Web { .. });
         if filmed {
-            cell.start_recording(web::FILM_EVERY_STEPS);
+            cell.start_recording(FILM_EVERY_STEPS);
         }
         let camera = *cell.camera();
         let outcome = cell.pick(&world_grasp(&camera, frame, *grasp));

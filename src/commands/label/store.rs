@@ -4,7 +4,7 @@
 use anyhow::bail;
 
 use super::clicks::{check_enough_clicks, Clicker};
-use super::LabelConfig;
+use super::config::LabelConfig;
 use crate::commands::Context;
 use crate::data::depth_files::check_depth_files;
 use crate::data::labels::{LabelStore, Labels, Progress};

@@ -6,28 +6,11 @@ use std::sync::Mutex;
 use super::{labels_in, lock, ObjectJob, ObjectSummary, Shared};
 use crate::assets::objects::ObjectModel;
 use crate::data::labels::{LabelStore, Labels, Progress};
-use crate::grasp::gripper::GRIPPER;
-use crate::grasp::tote::{FLOOR_TOP, PICK_TOTE};
 use crate::interrupt;
 use crate::present::web::labels_page::{self, LabelsAccess};
 use crate::present::web::report_route::ReportRoute;
 use crate::present::web::session::LabelSession;
 use crate::present::web::{Reply, Request, WebServer};
-use crate::vision::camera::Camera;
-
-/// Physics steps between two frames of an attempt's animation: 15 frames per simulated second.
-pub(super) const FILM_EVERY_STEPS: u64 = 16;
-
-/// The pads' width across the closing line in image pixels, at the tote floor.
-pub(super) fn pad_width_px(camera: &Camera) -> f32 {
-    let [x, y] = PICK_TOTE.center;
-    let centre = rapier3d::math::Vector::new(x, y, FLOOR_TOP);
-    let beside = centre + rapier3d::math::Vector::new(GRIPPER.pad_width, 0.0, 0.0);
-    match (camera.project(centre), camera.project(beside)) {
-        (Some(a), Some(b)) => ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt(),
-        _ => 4.0,
-    }
-}
 
 /// The running labeller's dataset, for the labels page: deletes go through the same copy the
 /// rounds append to, under the lock the command already holds.

@@ -9,7 +9,7 @@ use anyhow::Context as _;
 use serde::Deserialize;
 
 use super::files::Files;
-use super::{esc, missing};
+use super::html::{esc, missing};
 use crate::metrics::{FailureTally, Spread};
 use crate::named::Named;
 use crate::policy::PolicyKind;

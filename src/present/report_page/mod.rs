@@ -6,12 +6,14 @@
 
 mod evals;
 mod files;
+mod html;
 mod run_parts;
 
 use std::path::{Path, PathBuf};
 
 pub(crate) use files::files_dir;
 use files::Files;
+use html::esc;
 
 /// The page's frame and style, embedded in the binary (no CDN, no script).
 const TEMPLATE: &str = include_str!("page.html");
@@ -46,42 +48,9 @@ pub(crate) fn write_report_page(data_dir: &Path, out_html: &Path) -> anyhow::Res
     files.finish(&html)
 }
 
-/// Escapes text for HTML content and attribute values.
-pub(crate) fn esc(text: &str) -> String {
-    let mut out = String::with_capacity(text.len());
-    for c in text.chars() {
-        match c {
-            '&' => out.push_str("&amp;"),
-            '<' => out.push_str("&lt;"),
-            '>' => out.push_str("&gt;"),
-            '"' => out.push_str("&quot;"),
-            '\'' => out.push_str("&#39;"),
-            c => out.push(c),
-        }
-    }
-    out
-}
-
-/// A line saying what is missing and which command makes it.
-pub(crate) fn missing(what: &str, command: &str) -> String {
-    format!(
-        "<p class=\"missing\">{}: run <code>{}</code>.</p>\n",
-        esc(what),
-        esc(command)
-    )
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn escaping_covers_markup_and_quotes() {
-        assert_eq!(
-            esc("<a href=\"x\">'&'</a>"),
-            "&lt;a href=&quot;x&quot;&gt;&#39;&amp;&#39;&lt;/a&gt;"
-        );
-    }
 
     #[test]
     fn an_empty_data_directory_gives_a_page_of_missing_parts() {

@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::Context as _;
 
 use super::files::Files;
-use super::{esc, missing};
+use super::html::{esc, missing};
 use crate::data::labels::LabelStore;
 use crate::grasp::draw::draw_grasp;
 use crate::grasp::PixelGrasp;
