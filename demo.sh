@@ -17,6 +17,6 @@ SECONDS=0
 "$bin" train --epochs 30 --json "$out/train.json"
 "$bin" eval --task train --json "$out/eval_train.json"
 "$bin" eval --task test --json "$out/eval_test.json"
-"$bin" eval --task empty_bin --n_past_action 8 --record "$out/empty_bin.mp4" --json "$out/eval_empty_bin.json"
+"$bin" eval --task empty_bin --n-past-action 8 --record "$out/empty_bin.mp4" --json "$out/eval_empty_bin.json"
 "$bin" report
 echo "pipeline done in ${SECONDS} s; reports in $out/, the empty_bin video in $out/empty_bin.mp4, the page in data/report.html"

@@ -181,12 +181,12 @@ spec_args() {
     train) spec=(--task train --seeds 0) ;;
     test) spec=(--task test --seeds "$TEST_SEEDS") ;;
     htest) spec=(--task test --seeds "$HELD_TEST") ;;
-    e2) spec=(--task empty_bin --seeds 2 --n_past_action 8 --max-attempts "$MAX_ATTEMPTS") ;;
+    e2) spec=(--task empty_bin --seeds 2 --n-past-action 8 --max-attempts "$MAX_ATTEMPTS") ;;
     e) spec=(--task empty_bin --seeds "$EMPTY_SEEDS" --max-attempts "$MAX_ATTEMPTS") ;;
-    enp8) spec=(--task empty_bin --seeds "$EMPTY_SEEDS" --n_past_action 8 --max-attempts "$MAX_ATTEMPTS") ;;
-    enp25) spec=(--task empty_bin --seeds "$EMPTY_SEEDS" --n_past_action 25 --max-attempts "$MAX_ATTEMPTS") ;;
+    enp8) spec=(--task empty_bin --seeds "$EMPTY_SEEDS" --n-past-action 8 --max-attempts "$MAX_ATTEMPTS") ;;
+    enp25) spec=(--task empty_bin --seeds "$EMPTY_SEEDS" --n-past-action 25 --max-attempts "$MAX_ATTEMPTS") ;;
     he) spec=(--task empty_bin --seeds "$HELD_EMPTY" --max-attempts "$MAX_ATTEMPTS") ;;
-    henp8) spec=(--task empty_bin --seeds "$HELD_EMPTY" --n_past_action 8 --max-attempts "$MAX_ATTEMPTS") ;;
+    henp8) spec=(--task empty_bin --seeds "$HELD_EMPTY" --n-past-action 8 --max-attempts "$MAX_ATTEMPTS") ;;
     *) die "no evaluation spec $1" ;;
   esac
 }
@@ -254,7 +254,7 @@ t_pipeline() {
   timed "$d/times/eval_test.json" "$bin" --data "$data" --quiet --json "$d/eval_test.json" eval \
     --task test >"$d/eval_test.log" 2>&1
   timed "$d/times/eval_empty_bin.json" "$bin" --data "$data" --quiet --json "$d/eval_empty_bin.json" \
-    eval --task empty_bin --n_past_action 8 --max-attempts "$MAX_ATTEMPTS" \
+    eval --task empty_bin --n-past-action 8 --max-attempts "$MAX_ATTEMPTS" \
     --record "$d/empty_bin.mp4" >"$d/eval_empty_bin.log" 2>&1
   timed "$d/times/report.json" "$bin" --data "$data" --quiet --json "$d/report.json" report \
     >"$d/report.log" 2>&1
@@ -641,7 +641,7 @@ def head(title, command):
 def t_pipeline():
     d = f"{out}/pipeline"
     head("Pipeline against the Python reference",
-         "`./demo.sh`'s steps: label, train, eval train, test, empty_bin --n_past_action 8 --record, report.")
+         "`./demo.sh`'s steps: label, train, eval train, test, empty_bin --n-past-action 8 --record, report.")
     ev_walls = ", ".join(secs(wall(f"{d}/times/eval_{t}.json")) for t in ("train", "test", "empty_bin"))
     md(["machine", "commit", "labels", f"training, {E['EPOCHS']} epochs",
         "evals: train, test, empty_bin with video", "pipeline"],
@@ -743,7 +743,7 @@ def t_workcell():
 
 
 def t_quality():
-    head("Quality: model, random and oracle", "`graspmap eval --task T --seeds S [--n_past_action 8] [--policy P]`.")
+    head("Quality: model, random and oracle", "`graspmap eval --task T --seeds S [--n-past-action 8] [--policy P]`.")
     ref = {"train": "> 70 % (93 %)", "test": "≈ 50 % (68 %; 100 % with retries)",
            "e2": "at least 8 of 15 moved (15/15)"}
     m, r, o = (lambda n: ev("model-" + n)), (lambda n: ev("random-" + n)), (lambda n: ev("oracle-" + n))
@@ -759,14 +759,14 @@ def t_quality():
 
 
 def t_yardstick():
-    head("Oracle yardstick in clutter", "`graspmap eval --task empty_bin --policy oracle --seeds S [--n_past_action N]`.")
+    head("Oracle yardstick in clutter", "`graspmap eval --task empty_bin --policy oracle --seeds S [--n-past-action N]`.")
     a, b = seeds(E["EMPTY_SEEDS"]), seeds(E["HELD_EMPTY"])
     md(["policy", f"empty_bin, {a}", "pick success", f"empty_bin, {b}", "pick success"], [
         ["oracle, no memory", moved(ev("oracle-e"), lost=False), count(ev("oracle-e")),
          moved(ev("oracle-he"), lost=False), count(ev("oracle-he"))],
         ["oracle, np8", moved(ev("oracle-enp8"), lost=False), count(ev("oracle-enp8")),
          moved(ev("oracle-henp8"), lost=False), count(ev("oracle-henp8"))],
-        ["oracle, `--n_past_action 25` (the whole episode)", moved(ev("oracle-enp25"), lost=False),
+        ["oracle, `--n-past-action 25` (the whole episode)", moved(ev("oracle-enp25"), lost=False),
          count(ev("oracle-enp25")), DASH, DASH],
         ["model, np8", moved(ev("model-enp8"), lost=False), count(ev("model-enp8")),
          moved(ev("model-henp8"), lost=False), count(ev("model-henp8"))],
@@ -831,7 +831,7 @@ def t_centring():
 
 
 def t_suppression():
-    head("Failure suppression", "`graspmap eval --task empty_bin --n_past_action 8` with one parameter changed.")
+    head("Failure suppression", "`graspmap eval --task empty_bin --n-past-action 8` with one parameter changed.")
     base = ev("model-enp8")
     rows = [["defaults", moved(base, span=False, lost=False), DASH]]
     for tag, label in (("reach1", "`--suppress-rotation-reach 1`"), ("reach4", "`--suppress-rotation-reach 4`"),
@@ -839,7 +839,7 @@ def t_suppression():
         r = ev(f"model-enp8-{tag}")
         rows.append([label, moved(r, span=False, lost=False), paired(r, base)])
     off = ev("model-e")
-    rows.append(["`--n_past_action 0` (off)", moved(off, span=False, lost=False), paired(off, base)])
+    rows.append(["`--n-past-action 0` (off)", moved(off, span=False, lost=False), paired(off, base)])
     md(["setting", f"empty_bin, {seeds(E['EMPTY_SEEDS'])}", "paired against the defaults"], rows)
 
 

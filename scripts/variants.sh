@@ -10,7 +10,7 @@
 #   VARIANTS="rgb:1 rgbd:1 rgb:3 rgbd:3"  input:clutter[:per-object] of each variant; the first
 #                                          is the baseline the others are compared with
 #   EXTRA=2   how many of the best variants (baseline included) also get the flag combinations
-#             (--verify-top 0, no --n_past_action, both), after every variant's core evals
+#             (--verify-top 0, no --n-past-action, both), after every variant's core evals
 #   EPOCHS=30 TEST_SEEDS=0,1000,2000 EMPTY_SEEDS=1-10   only to try the script out quickly
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -47,7 +47,7 @@ core_evals() {
   local dir=$1
   run_eval "$dir" train_vt200 --task train --seeds 0
   run_eval "$dir" test_vt200 --task test --seeds "$test_seeds"
-  run_eval "$dir" empty_np8_vt200 --task empty_bin --seeds "$empty_seeds" --n_past_action 8
+  run_eval "$dir" empty_np8_vt200 --task empty_bin --seeds "$empty_seeds" --n-past-action 8
 }
 
 # Most telling first: is the depth test still needed, then does suppression matter.
@@ -55,7 +55,7 @@ extra_evals() {
   local dir=$1
   run_eval "$dir" train_vt0 --task train --seeds 0 --verify-top 0
   run_eval "$dir" test_vt0 --task test --seeds "$test_seeds" --verify-top 0
-  run_eval "$dir" empty_np8_vt0 --task empty_bin --seeds "$empty_seeds" --n_past_action 8 --verify-top 0
+  run_eval "$dir" empty_np8_vt0 --task empty_bin --seeds "$empty_seeds" --n-past-action 8 --verify-top 0
   run_eval "$dir" empty_np0_vt200 --task empty_bin --seeds "$empty_seeds"
   run_eval "$dir" empty_np0_vt0 --task empty_bin --seeds "$empty_seeds" --verify-top 0
 }

@@ -1,5 +1,5 @@
 //! Options with a stable name: how the enums of configs are spelled on the command line, in
-//! JSON reports and in printed tables, from one list per enum.
+//! JSON reports and in printed tables, from one list per enum; and how counts are spelled.
 //!
 //! The CLI builds its value parsers from these lists, so the layers below it never see the argument parser.
 
@@ -61,3 +61,12 @@ macro_rules! named_enum {
     };
 }
 pub(crate) use named_enum;
+
+/// "1 label", "2 labels": a count and its noun, plural unless the count is one.
+pub(crate) fn counted(n: usize, noun: &str) -> String {
+    if n == 1 {
+        format!("1 {noun}")
+    } else {
+        format!("{n} {noun}s")
+    }
+}

@@ -25,7 +25,7 @@ use crate::sim::WorkcellConfig;
 
 /// Teach a simulated UR5 to pick up objects it has never seen, from a few dozen labelled grasps.
 #[derive(Debug, Parser)]
-#[command(name = "graspmap", version, about)]
+#[command(name = "graspmap", version, about, allow_negative_numbers = true)]
 pub(crate) struct Cli {
     #[command(flatten)]
     pub(crate) global: GlobalArgs,
@@ -60,21 +60,28 @@ pub(crate) struct GlobalArgs {
 #[derive(Debug, Subcommand)]
 pub(crate) enum Command {
     /// Drop objects into bin 1 and save the top-down camera image.
+    #[command(allow_negative_numbers = true)]
     Scene(SceneArgs),
     /// Drop one object and run one simulated pick attempt.
+    #[command(allow_negative_numbers = true)]
     Grasp(GraspArgs),
     /// Collect verified grasp labels for the training objects.
+    #[command(allow_negative_numbers = true)]
     Label(LabelArgs),
     /// Train the affordance model on the labels.
+    #[command(allow_negative_numbers = true)]
     Train(TrainArgs),
     /// Let a policy pick objects in simulation and report how it did.
+    #[command(allow_negative_numbers = true)]
     Eval(EvalArgs),
     /// Run the trained model on a 128 × 128 RGB image and print its best grasp.
+    #[command(allow_negative_numbers = true)]
     Predict(PredictArgs),
     /// Write one self-contained HTML page of the whole run (labels, training, evaluations).
+    #[command(allow_negative_numbers = true)]
     Report(ReportArgs),
     /// Measure speed against the Python PyTorch peer.
-    #[command(subcommand)]
+    #[command(subcommand, allow_negative_numbers = true)]
     Bench(BenchCommand),
 }
 
@@ -115,8 +122,8 @@ pub(crate) struct TrainArgs {
     /// Images per optimiser step.
     #[arg(long, default_value_t = TrainConfig::default().batch_size as u32, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) batch_size: u32,
-    /// Initial Adam learning rate.
-    #[arg(long, default_value_t = TrainConfig::default().lr, value_parser = positive::<f64>)]
+    /// Initial Adam learning rate (above 0, at most 1).
+    #[arg(long, default_value_t = TrainConfig::default().lr, value_parser = positive_up_to::<f64>(1.0))]
     pub(crate) lr: f64,
     /// Seed of the 90/10 split, initial weights, data order and augmentation.
     #[arg(long, default_value_t = 0)]
@@ -198,14 +205,14 @@ pub(crate) struct EvalArgs {
     /// Failure suppression: lower the affordance around the last N failed actions (0 = off);
     /// the oracle instead tries first the objects fewer of them landed on.
     #[arg(
-        long = "n_past_action",
-        visible_alias = "n-past-action",
+        long = "n-past-action",
+        visible_alias = "n_past_action",
         value_name = "N",
         default_value_t = 0
     )]
     pub(crate) n_past_action: usize,
-    /// Suppression: standard deviation of the subtracted Gaussian in pixels.
-    #[arg(long, value_name = "PX", default_value_t = SuppressionConfig::default().sigma_px, value_parser = positive::<f32>)]
+    /// Suppression: standard deviation of the subtracted Gaussian in pixels (above 0, at most 64).
+    #[arg(long, value_name = "PX", default_value_t = SuppressionConfig::default().sigma_px, value_parser = positive_up_to::<f32>(64.0))]
     pub(crate) suppression_sigma: f32,
     /// Suppression: also lower the rotations within this many 22.5° bins of the failed one
     /// (0 = its own rotation only, 4 = all).
@@ -334,15 +341,6 @@ pub(crate) fn parse_seed_list(text: &str) -> Result<SeedList, String> {
     Ok(SeedList(seeds))
 }
 
-fn positive<T: std::str::FromStr + PartialOrd + Default + Copy + Into<f64>>(
-    text: &str,
-) -> Result<T, String> {
-    match text.parse::<T>() {
-        Ok(v) if v > T::default() && v.into().is_finite() => Ok(v),
-        _ => Err(format!("'{text}' must be a positive number")),
-    }
-}
-
 /// `graspmap label`.
 #[derive(Debug, Args)]
 #[command(group = clap::ArgGroup::new("clicker").args(["clicks", "interactive", "web"]))]
@@ -376,11 +374,12 @@ pub(crate) struct LabelArgs {
     /// Where --interactive writes the image with the cursor's grasp [default: DATA/labels/preview.png].
     #[arg(long, value_name = "PNG", requires = "interactive")]
     pub(crate) preview: Option<PathBuf>,
-    /// Scripted clicks: standard deviation of the click position noise in pixels.
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    /// Scripted clicks: standard deviation of the click position noise in pixels (0 to 64).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative_up_to(64.0))]
     pub(crate) click_noise_px: f32,
-    /// Scripted clicks: standard deviation of the angle noise in degrees (before snapping to 22.5°).
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative)]
+    /// Scripted clicks: standard deviation of the angle noise in degrees, before snapping to
+    /// 22.5° (0 to 180).
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative_up_to(180.0))]
     pub(crate) angle_noise_deg: f32,
     /// Delete existing labels and start over.
     #[arg(long, conflicts_with = "check")]
@@ -424,6 +423,27 @@ fn fraction(text: &str) -> Result<f32, String> {
         .ok_or_else(|| format!("'{text}' must be a fraction from 0 to 1"))
 }
 
+/// A value parser for a finite number in (0, `max`]: the flags whose range the help gives.
+fn positive_up_to<T>(max: f64) -> impl Fn(&str) -> Result<T, String> + Clone + Send + Sync + 'static
+where
+    T: std::str::FromStr + Into<f64> + Copy + Send + Sync + 'static,
+{
+    move |text: &str| match text.parse::<T>() {
+        Ok(v) if v.into() > 0.0 && v.into() <= max => Ok(v),
+        _ => Err(format!(
+            "'{text}' must be a number above 0 and at most {max}"
+        )),
+    }
+}
+
+/// A value parser for a finite number in [0, `max`].
+fn non_negative_up_to(max: f32) -> impl Fn(&str) -> Result<f32, String> + Clone + Send + Sync {
+    move |text: &str| match non_negative(text) {
+        Ok(v) if v <= max => Ok(v),
+        _ => Err(format!("'{text}' must be a number from 0 to {max}")),
+    }
+}
+
 fn non_negative(text: &str) -> Result<f32, String> {
     match text.parse::<f32>() {
         Ok(v) if v >= 0.0 && v.is_finite() => Ok(v),
@@ -461,7 +481,7 @@ pub(crate) struct GraspArgs {
     /// Grasp centre as column,row in the 128 × 128 image (needs --angle).
     #[arg(long, value_name = "U,V", requires = "angle")]
     pub(crate) pixel: Option<String>,
-    /// Grasp angle in degrees, clockwise in the image; normalised mod 180.
+    /// Grasp angle in degrees from -360 to 360, clockwise in the image; normalised mod 180.
     #[arg(
         long,
         value_name = "DEG",
@@ -478,8 +498,8 @@ pub(crate) struct GraspArgs {
     /// Write a video of the attempt from an oblique view: .mp4 (H.264) or .gif.
     #[arg(long, value_name = "VIDEO")]
     pub(crate) record: Option<PathBuf>,
-    /// Grip force per finger in newtons.
-    #[arg(long, default_value_t = WorkcellConfig::default().grip_force, value_parser = positive::<f32>)]
+    /// Grip force per finger in newtons (above 0, at most 200).
+    #[arg(long, default_value_t = WorkcellConfig::default().grip_force, value_parser = positive_up_to::<f32>(200.0))]
     pub(crate) grip_force: f32,
     /// Also save the camera image with the grasp drawn (.png).
     #[arg(long, value_name = "PNG")]
@@ -510,8 +530,25 @@ pub fn run() -> anyhow::Result<()> {
         Err(e) => {
             use clap::error::ErrorKind;
             if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
-                e.print()?;
-                return Ok(());
+                // `graspmap --help | head -1` closes the pipe early: the reader has what it
+                // wanted, which is no error.
+                return match e.print() {
+                    Err(io) if io.kind() != std::io::ErrorKind::BrokenPipe => Err(io.into()),
+                    _ => Ok(()),
+                };
+            }
+            if matches!(
+                e.kind(),
+                ErrorKind::MissingSubcommand | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+            ) {
+                let names: Vec<String> = <Cli as clap::CommandFactory>::command()
+                    .get_subcommands()
+                    .map(|c| c.get_name().to_owned())
+                    .collect();
+                bail!(
+                    "no command given: choose one of {} (see graspmap --help)",
+                    names.join(", ")
+                );
             }
             // clap's message names the flag and the fix over a few lines; fold it into one.
             let text = e.to_string();
@@ -539,7 +576,11 @@ pub fn run() -> anyhow::Result<()> {
     {
         crate::interrupt::install().context("installing the Ctrl-C handler")?;
     }
+    refuse_unused_globals(&cli.global, &cli.command)?;
     let context = cli.global.context()?;
+    if let Some(json) = &context.json {
+        crate::data::output::check_output_file(json, "--json")?;
+    }
     let data = context.data.clone();
     match cli.command {
         Command::Scene(args) => commands::scene::run(
@@ -574,6 +615,50 @@ pub fn run() -> anyhow::Result<()> {
             },
         ),
     }
+}
+
+impl Command {
+    /// The subcommand as typed.
+    fn name(&self) -> &'static str {
+        match self {
+            Command::Scene(_) => "scene",
+            Command::Grasp(_) => "grasp",
+            Command::Label(_) => "label",
+            Command::Train(_) => "train",
+            Command::Eval(_) => "eval",
+            Command::Predict(_) => "predict",
+            Command::Report(_) => "report",
+            Command::Bench(_) => "bench",
+        }
+    }
+
+    /// Whether the command loads object models, and whether it reads the train/test split.
+    fn reads_objects_and_split(&self) -> (bool, bool) {
+        match self {
+            Command::Scene(_) | Command::Grasp(_) => (true, false),
+            Command::Label(_) | Command::Eval(_) => (true, true),
+            Command::Train(_) | Command::Predict(_) | Command::Report(_) | Command::Bench(_) => {
+                (false, false)
+            }
+        }
+    }
+}
+
+/// A global flag that the command would ignore is an error, not a silent no-op.
+fn refuse_unused_globals(global: &GlobalArgs, command: &Command) -> anyhow::Result<()> {
+    let (objects, split) = command.reads_objects_and_split();
+    let name = command.name();
+    if global.objects_dir.is_some() && !objects {
+        bail!(
+            "--objects-dir is not used by `graspmap {name}` (scene, grasp, label and eval load objects); leave it out"
+        );
+    }
+    if global.split.is_some() && !split {
+        bail!(
+            "--split is not used by `graspmap {name}` (label and eval read the split); leave it out"
+        );
+    }
+    Ok(())
 }
 
 fn init_logging(quiet: bool) {

@@ -129,7 +129,7 @@ impl GraspArgs {
             (Some(pixel), Some(angle)) => {
                 let (u, v) = super::parse_pixel(pixel)?;
                 let grasp = PixelGrasp::checked(f64::from(u), f64::from(v), angle)
-                    .with_context(|| format!("--angle {angle}"))?;
+                    .with_context(|| format!("--angle {angle:?}"))?;
                 GraspChoice::Given(grasp)
             }
             _ if self.oracle => GraspChoice::Oracle,

@@ -22,7 +22,7 @@ use crate::model::checkpoint::{
 use crate::model::config::{Plateau, TrainConfig};
 use crate::model::train::{predict_map, train_epoch, validate, Adam, Subset};
 use crate::model::unet::{MiniUNet, Precision};
-use crate::named::Named;
+use crate::named::{counted, Named};
 use crate::present::envelope::write_report;
 use crate::vision::colormap::viridis;
 
@@ -71,9 +71,9 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
     };
     if images.len() < 2 {
         bail!(
-            "{} has {} labels; training needs at least 2 (run graspmap label first)",
+            "{} has {}; training needs at least 2 (run graspmap label first)",
             store.dir().display(),
-            images.len()
+            counted(images.len(), "label")
         );
     }
     let out_dir = context.data.join("affordance");
@@ -83,8 +83,9 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
     let mut run = start(&config, &out_dir, images.len(), resume)?;
     if run.meta.epoch >= config.epochs {
         context.say(&format!(
-            "already trained {} epochs (--epochs {}); nothing to do",
-            run.meta.epoch, config.epochs
+            "already trained {} (--epochs {}); nothing to do",
+            counted(run.meta.epoch as usize, "epoch"),
+            config.epochs
         ));
     }
 
@@ -135,9 +136,9 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
         checkpoint: out_dir.join("best.safetensors").display().to_string(),
     };
     context.say(&format!(
-        "trained {} epochs on {} labels ({} train / {} validation): best validation loss {:.5} at epoch {} -> {} ({:.1} s)",
-        results.epochs_run,
-        results.labels,
+        "trained {} on {} ({} train / {} validation): best validation loss {:.5} at epoch {} -> {} ({:.1} s)",
+        counted(results.epochs_run as usize, "epoch"),
+        counted(results.labels, "label"),
         results.train_samples,
         results.val_samples,
         results.best_val_loss,

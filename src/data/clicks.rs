@@ -13,17 +13,20 @@ use crate::grasp::{PixelError, PixelGrasp};
 pub(crate) fn read_clicks(
     path: &Path,
     train: &[String],
+    test: &[String],
 ) -> anyhow::Result<BTreeMap<String, Vec<Label>>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("reading --clicks {}", path.display()))?;
-    parse_clicks(&text, path, train)
+    parse_clicks(&text, path, train, test)
 }
 
-/// Parses a clicks file's text; `path` names it in errors.
+/// Parses a clicks file's text; `path` names it in errors. Clicks label the `train` objects;
+/// one for a `test` object is refused as such.
 pub(crate) fn parse_clicks(
     text: &str,
     path: &Path,
     train: &[String],
+    test: &[String],
 ) -> anyhow::Result<BTreeMap<String, Vec<Label>>> {
     let value: serde_json::Value = serde_json::from_str(text)
         .with_context(|| format!("--clicks {} is not valid JSON", path.display()))?;
@@ -40,6 +43,13 @@ pub(crate) fn parse_clicks(
             .get("object")
             .and_then(|o| o.as_str())
             .with_context(|| format!("{}: missing \"object\" name", at()))?;
+        if test.iter().any(|t| t == object) {
+            bail!(
+                "{}: '{object}' is a test object, held out of labelling; clicks label the training objects ({})",
+                at(),
+                train.join(", ")
+            );
+        }
         if !train.iter().any(|t| t == object) {
             bail!(
                 "{}: unknown object '{object}' (training objects: {})",
@@ -94,7 +104,7 @@ mod fuzz {
         fn fuzz_json_clicks(edits in edits()) {
             let input = text(&mutate(CLICKS.as_bytes(), &edits));
             let train = ["YcbHammer".to_owned(), "YcbTomatoSoupCan".to_owned()];
-            check(|| crate::data::clicks::parse_clicks(&input, Path::new("clicks.json"), &train))?;
+            check(|| crate::data::clicks::parse_clicks(&input, Path::new("clicks.json"), &train, &[]))?;
         }
     }
 }

@@ -53,11 +53,30 @@ pub(crate) fn decode_observation(bytes: &[u8], path: &Path) -> anyhow::Result<Rg
             Ok(image::DynamicImage::ImageRgba8(rgba).into_rgb8())
         }
         other => bail!(
-            "--image {} is {:?}, not 8-bit RGB; save it as 8-bit RGB",
+            "--image {} is {}, not 8-bit RGB; save it as 8-bit RGB",
             path.display(),
-            other.color()
+            colour_words(other.color())
         ),
     }
+}
+
+/// An image's colour type as people say it: "8-bit greyscale", "16-bit RGB with alpha".
+fn colour_words(colour: image::ColorType) -> String {
+    use image::ColorType as C;
+    let (bits, channels) = match colour {
+        C::L8 => ("8-bit", "greyscale"),
+        C::La8 => ("8-bit", "greyscale with alpha"),
+        C::Rgb8 => ("8-bit", "RGB"),
+        C::Rgba8 => ("8-bit", "RGB with alpha"),
+        C::L16 => ("16-bit", "greyscale"),
+        C::La16 => ("16-bit", "greyscale with alpha"),
+        C::Rgb16 => ("16-bit", "RGB"),
+        C::Rgba16 => ("16-bit", "RGB with alpha"),
+        C::Rgb32F => ("32-bit float", "RGB"),
+        C::Rgba32F => ("32-bit float", "RGB with alpha"),
+        other => return format!("{other:?}"),
+    };
+    format!("{bits} {channels}")
 }
 
 #[cfg(test)]

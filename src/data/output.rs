@@ -77,6 +77,20 @@ pub(crate) fn check_output_file(path: &Path, what: &str) -> Result<(), OutputErr
     probe(&parent, path, what)
 }
 
+/// [`check_output_file`] for a path that may lie under the data directory `data`, where the
+/// command creates the folders it needs (a default output, say); elsewhere the folder must exist.
+pub(crate) fn check_output_file_in(
+    path: &Path,
+    what: &str,
+    data: &Path,
+) -> Result<(), OutputError> {
+    let parent = parent_of(path);
+    if parent.starts_with(data) && !parent.exists() {
+        check_output_dir(&parent, what)?;
+    }
+    check_output_file(path, what)
+}
+
 /// Checks that the folder `dir` exists or can be created, and can be written; `what` names it.
 pub(crate) fn check_output_dir(dir: &Path, what: &str) -> Result<(), OutputError> {
     if let Some(blocker) = dir.ancestors().find(|a| a.is_file()) {

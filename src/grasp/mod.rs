@@ -12,6 +12,10 @@ pub(crate) mod rotate;
 pub mod tote;
 pub mod world;
 
+/// Largest grasp angle magnitude accepted from users (degrees); angles are normalised mod 180, so
+/// a full turn either way covers every way of writing one, and no value overflows on the way.
+pub(crate) const MAX_ANGLE_DEG: f64 = 360.0;
+
 /// Side length of the camera image and of every label image (px).
 pub(crate) const IMAGE_SIZE: u32 = 128;
 /// Number of angle bins over the half turn.
@@ -46,8 +50,10 @@ pub(crate) enum PixelError {
         /// The largest valid coordinate.
         max: u32,
     },
-    /// An angle that is not a finite number.
-    #[error("angle = {value} is not a finite number of degrees")]
+    /// An angle that is not a finite number of degrees within ±[`MAX_ANGLE_DEG`].
+    #[error(
+        "angle = {value:?} must be a number of degrees from -{MAX_ANGLE_DEG} to {MAX_ANGLE_DEG}"
+    )]
     BadAngle {
         /// The value given.
         value: f64,
@@ -70,7 +76,7 @@ impl PixelGrasp {
                 })
             }
         };
-        if !angle_deg.is_finite() {
+        if !angle_deg.is_finite() || angle_deg.abs() > MAX_ANGLE_DEG {
             return Err(PixelError::BadAngle { value: angle_deg });
         }
         Ok(Self {

@@ -88,7 +88,10 @@ pub fn read_checkpoint(
     name: &str,
 ) -> anyhow::Result<(BTreeMap<String, Tensor>, CheckpointMeta)> {
     let (weights, sidecar) = checkpoint_paths(dir, name);
-    let decoded = read(&weights)?;
+    let decoded = read(
+        &weights,
+        "train anew with --force, or restore the file from a copy",
+    )?;
     let sidecar_meta = || -> anyhow::Result<CheckpointMeta> {
         let text = std::fs::read_to_string(&sidecar)
             .with_context(|| format!("reading {}", sidecar.display()))?;
@@ -221,11 +224,11 @@ pub(crate) struct Decoded {
     pub(crate) meta: Option<CheckpointMeta>,
 }
 
-/// Decodes safetensors bytes; `source` names the file in errors.
-pub(crate) fn decode(bytes: &[u8], source: &Path) -> anyhow::Result<Decoded> {
+/// Decodes safetensors bytes; `source` names the file in errors, which end with `fix`.
+pub(crate) fn decode(bytes: &[u8], source: &Path, fix: &str) -> anyhow::Result<Decoded> {
     let corrupt = || {
         format!(
-            "{} is not a readable safetensors checkpoint (retrain, or pass another --checkpoint)",
+            "{} is not a readable safetensors checkpoint ({fix})",
             source.display()
         )
     };
@@ -278,15 +281,12 @@ pub(crate) fn parse_meta(text: &str, source: &Path) -> anyhow::Result<Checkpoint
     Ok(meta)
 }
 
-/// Reads and decodes a checkpoint file.
-pub(crate) fn read(path: &Path) -> anyhow::Result<Decoded> {
-    let bytes = std::fs::read(path).with_context(|| {
-        format!(
-            "reading {} (train first, or check --data and --checkpoint)",
-            path.display()
-        )
-    })?;
-    decode(&bytes, path)
+/// Reads and decodes a checkpoint file; errors end with `fix`, the way forward for the command
+/// that reads it.
+pub(crate) fn read(path: &Path, fix: &str) -> anyhow::Result<Decoded> {
+    let bytes =
+        std::fs::read(path).with_context(|| format!("reading {} ({fix})", path.display()))?;
+    decode(&bytes, path, fix)
 }
 
 /// Writes the weights (plus any extra tensors, sorted by name) with the training state inside,
@@ -368,7 +368,7 @@ mod fuzz {
         #[test]
         fn fuzz_safetensors(edits in edits()) {
             let input = mutate(small_safetensors(), &edits);
-            check(|| crate::model::checkpoint::decode(&input, Path::new("last.safetensors")))?;
+            check(|| crate::model::checkpoint::decode(&input, Path::new("last.safetensors"), "retrain"))?;
         }
     }
 }

@@ -32,13 +32,23 @@ pub(crate) struct AffordanceModel {
 impl AffordanceModel {
     /// Loads the weights of a `.safetensors` checkpoint (as `graspmap train` writes them).
     pub(crate) fn load(path: &Path, precision: Precision) -> anyhow::Result<Self> {
+        if path.is_dir() {
+            bail!(
+                "checkpoint {} is a directory; give the weights file, e.g. {}",
+                path.display(),
+                path.join("best.safetensors").display()
+            );
+        }
         if !path.is_file() {
             bail!(
                 "checkpoint {} not found: run `graspmap train` first, or pass --checkpoint PATH",
                 path.display()
             );
         }
-        let decoded = super::checkpoint::read(path)?;
+        let decoded = super::checkpoint::read(
+            path,
+            "train first, or pass another --checkpoint, or check --data",
+        )?;
         // The input the model was trained on comes with it; weights without a training state
         // (e.g. the reference's) are rgb.
         let input = decoded

@@ -10,7 +10,7 @@ use crate::model::maps::AffordanceMaps;
 /// How failure suppression lowers the maps around past actions.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub(crate) struct SuppressionConfig {
-    /// Actions remembered (the user's `--n_past_action`); 0 turns suppression off.
+    /// Actions remembered (the user's `--n-past-action`); 0 turns suppression off.
     pub(crate) remember: usize,
     /// Standard deviation of the subtracted Gaussian, in pixels.
     pub(crate) sigma_px: f32,

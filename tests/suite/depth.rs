@@ -22,11 +22,13 @@ const BIN: &str = env!("CARGO_BIN_EXE_graspmap");
 const TRAIN: [&str; 2] = ["YcbTennisBall", "YcbFoamBrick"];
 
 fn graspmap(dir: &Path, args: &[&str]) -> Output {
-    Command::new(BIN)
-        .arg("--data")
-        .arg(dir.join("data"))
-        .arg("--split")
-        .arg(dir.join("split.json"))
+    let mut command = Command::new(BIN);
+    command.arg("--data").arg(dir.join("data"));
+    // Only label and eval read the split; the other commands refuse the flag.
+    if matches!(args.first(), Some(&"label" | &"eval")) {
+        command.arg("--split").arg(dir.join("split.json"));
+    }
+    command
         .args(args)
         .env_remove("GRASPMAP_LOG")
         .output()

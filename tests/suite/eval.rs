@@ -33,11 +33,14 @@ impl Setup {
         self.dir.path().join(name)
     }
 
-    /// Runs graspmap with this data directory and split.
+    /// Runs graspmap with this data directory, and this split for the commands that read one.
     pub(crate) fn run(&self, args: &[&str]) -> std::process::Output {
         let data = self.dir.path().to_str().unwrap().to_owned();
         let split = self.path("split.json").to_str().unwrap().to_owned();
-        let mut all = vec!["--data", &data, "--split", &split, "--threads", "2"];
+        let mut all = vec!["--data", &data, "--threads", "2"];
+        if args.iter().any(|a| *a == "eval" || *a == "label") {
+            all.extend(["--split", split.as_str()]);
+        }
         all.extend_from_slice(args);
         graspmap(&all)
     }
@@ -346,8 +349,24 @@ fn bad_inputs_are_one_line_errors_with_exit_status_2() {
         let out = setup.run(&["eval", "--task", "test", "--verify-top", "0", flag, value]);
         assert_user_error(&out, &[&format!("{flag} {value}"), "--verify-top 0"]);
     }
-    let out = setup.run(&["eval", "--task", "test", "--resume"]);
-    assert_user_error(&out, &["--resume", "--json"]);
+    // --resume continues the report of the same task and policy (--json, else the kept copy).
+    let other = setup.path("other_task.json");
+    std::fs::write(
+        &other,
+        r#"{"schema": "graspmap.eval/2", "config": {"task": "train", "policy": "random"}, "results": {"runs": []}}"#,
+    )
+    .unwrap();
+    let out = setup.run(&[
+        "--json",
+        other.to_str().unwrap(),
+        "eval",
+        "--task",
+        "test",
+        "--policy",
+        "random",
+        "--resume",
+    ]);
+    assert_user_error(&out, &["--task train", "--task test"]);
     let corrupt = setup.path("corrupt.safetensors");
     std::fs::write(&corrupt, b"not a checkpoint").unwrap();
     let out = setup.run(&[
@@ -461,7 +480,8 @@ fn ctrl_c_keeps_the_finished_scenes_and_resume_equals_an_uninterrupted_sweep() {
     let said: Vec<String> = lines.map(Result::unwrap).collect();
     assert_eq!(child.wait().unwrap().code(), Some(130), "{said:?}");
     assert!(
-        said.iter().any(|l| l.contains("rerun with --resume")),
+        said.iter()
+            .any(|l| l.contains("rerun the same command with --resume")),
         "{said:?}"
     );
     let partial: Value = serde_json::from_str(&std::fs::read_to_string(&report).unwrap()).unwrap();

@@ -5,6 +5,7 @@
 //! the run report and videos, and the web pages (over HTTP and in a browser). `layers` reads
 //! src/ itself: its imports against the layer table in src/lib.rs.
 
+mod bad_input;
 mod browser;
 mod cli;
 mod common;

@@ -59,6 +59,8 @@ fn small_run() -> Setup {
             "2",
             "--precision",
             "fp32",
+            // Over the set-up's untrained checkpoint.
+            "--force",
         ][..],
         &["eval", "--task", "train"][..],
         &["eval", "--task", "train", "--policy", "random"][..],

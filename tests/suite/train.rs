@@ -307,6 +307,11 @@ fn a_full_disk_at_any_write_of_an_epoch_fails_clearly_and_leaves_a_resumable_run
             // What is there is whole: it reads back.
             read_checkpoint(&affordance, "last").unwrap();
             vec!["--epochs", "1", "--resume"]
+        } else if affordance.join("best.safetensors").exists() {
+            // A model without its resume state is still never replaced without asking.
+            let refused = train(data.path(), &["--epochs", "1"]);
+            assert_user_error(&refused, &["already holds a trained model", "--force"]);
+            vec!["--epochs", "1", "--force"]
         } else {
             vec!["--epochs", "1"]
         };

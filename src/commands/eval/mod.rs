@@ -17,7 +17,7 @@ use crate::grasp::world::world_grasp;
 use crate::interrupt;
 use crate::model::inference::AffordanceModel;
 use crate::model::unet::Precision;
-use crate::named::Named;
+use crate::named::{counted, Named};
 use crate::policy::baselines::{OraclePolicy, RandomPolicy};
 use crate::policy::model::{ModelPolicy, ModelPolicyConfig};
 use crate::policy::suppression::{Suppression, SuppressionConfig};
@@ -124,7 +124,15 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
     };
 
     let mut runs = if config.resume {
-        finished_runs(resume_source(context, &kept), &config)?
+        let source = resume_source(context, &kept);
+        let runs = finished_runs(source, &config)?;
+        context.say(&format!(
+            "resuming: {} of {} already in {}",
+            runs.len(),
+            counted(seeds.len(), "scene"),
+            source.display()
+        ));
+        runs
     } else {
         Vec::new()
     };
@@ -292,9 +300,10 @@ fn announce_plan(context: &Context, task: Task, per_scene: u64, scenes: usize) {
         format!("{:.0} min", seconds / 60.0)
     };
     eprintln!(
-        "eval: {scenes} scene{} of up to {per_scene} attempts, {attempts} in all: about {estimate} \
-         at {} s an attempt; Ctrl-C keeps the finished scenes, --resume continues",
-        if scenes == 1 { "" } else { "s" },
+        "eval: {} of up to {}, {attempts} attempts in all: about {estimate} at {} s an attempt; \
+         Ctrl-C keeps the finished scenes, --resume continues",
+        counted(scenes, "scene"),
+        counted(per_scene as usize, "attempt"),
         typical_attempt_seconds(task)
     );
 }

@@ -22,7 +22,7 @@ use crate::data::output::check_output_dir;
 use crate::grasp::world::world_grasp;
 use crate::interrupt;
 use crate::metrics::FailureTally;
-use crate::named::Named;
+use crate::named::{counted, Named};
 use crate::present::envelope::write_report;
 use crate::present::web::session::{pad_width_px, AttemptView, LabelSession, FILM_EVERY_STEPS};
 use crate::present::web::WebServer;
@@ -75,7 +75,7 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     let split = context.split()?;
     check_clutter(args.clutter, &split.train)?;
     let models = context.objects.load_all(&split.train)?;
-    let clicker = clicker(&args, &split.train)?;
+    let clicker = clicker(&args, &split.train, &split.test)?;
     if let Clicker::Web { server, .. } = &clicker {
         context.say(&format!(
             "labelling page at {} (open it in a browser; Ctrl-C stops the server)",
@@ -140,13 +140,15 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
             && labels_in(&state.labels, &split.train, args.per_object) == wanted
         {
             context.say(&format!(
-                "server stopped; {kept} labels in {}, complete",
+                "server stopped; {} in {}, complete",
+                counted(kept, "label"),
                 store.dir().display()
             ));
             return Ok(());
         }
         context.say(&format!(
-            "{interrupted}: {kept} labels kept in {}, each verified and saved; rerun the same command to continue",
+            "{interrupted}: {} kept in {}, each verified and saved; rerun the same command to continue",
+            counted(kept, "label"),
             store.dir().display()
         ));
         return Err(interrupted.into());
@@ -216,10 +218,10 @@ fn check_clutter(clutter: u32, train: &[String]) -> anyhow::Result<()> {
 }
 
 /// Where this run's clicks come from, with a clicks file read and checked up front.
-fn clicker(args: &LabelConfig, train: &[String]) -> anyhow::Result<Clicker> {
+fn clicker(args: &LabelConfig, train: &[String], test: &[String]) -> anyhow::Result<Clicker> {
     Ok(match &args.source {
         ClickSource::File(path) => Clicker::File {
-            clicks: read_clicks(path, train)?,
+            clicks: read_clicks(path, train, test)?,
         },
         ClickSource::Interactive { preview } => Clicker::Interactive {
             preview: preview.clone(),
@@ -466,7 +468,10 @@ fn print_summary(context: &Context, results: &LabelResults) {
         ));
     }
     context.say(&format!(
-        "{} labels in {} rounds in {} ({:.1} s)",
-        results.total_labels, results.total_rounds, results.labels_dir, results.wall_seconds
+        "{} in {} in {} ({:.1} s)",
+        counted(results.total_labels, "label"),
+        counted(results.total_rounds as usize, "round"),
+        results.labels_dir,
+        results.wall_seconds
     ));
 }

@@ -8,6 +8,7 @@ use super::config::LabelConfig;
 use crate::commands::Context;
 use crate::data::depth_files::check_depth_files;
 use crate::data::labels::{LabelStore, Labels, Progress};
+use crate::named::counted;
 use crate::present::envelope::write_report;
 
 /// Clears or repairs the store before the rounds: the labels and progress to continue from.
@@ -225,10 +226,10 @@ pub(super) fn check(context: &Context, store: &LabelStore, known: &[String]) -> 
     }
     let labels = store.load()?;
     context.say(&format!(
-        "{}: {} labels for {} objects, no problems",
+        "{}: {} for {}, no problems",
         store.dir().display(),
-        labels.len(),
-        labels.iter().count()
+        counted(labels.len(), "label"),
+        counted(labels.iter().count(), "object")
     ));
     Ok(())
 }

@@ -11,6 +11,7 @@ use super::html::{esc, missing};
 use crate::data::labels::LabelStore;
 use crate::grasp::draw::draw_grasp;
 use crate::grasp::PixelGrasp;
+use crate::named::counted;
 
 /// Label images shown: the first label of this many objects.
 const LABEL_IMAGES: usize = 8;
@@ -29,9 +30,9 @@ pub(crate) fn labels_section(data_dir: &Path, files: &mut Files) -> anyhow::Resu
     let objects = labels.iter().count();
     let _ = writeln!(
         html,
-        "<p>{} labels of {objects} object{} in <code>{}</code>.</p>",
-        labels.len(),
-        plural(objects),
+        "<p>{} of {} in <code>{}</code>.</p>",
+        counted(labels.len(), "label"),
+        counted(objects, "object"),
         esc(&store.labels_path().display().to_string())
     );
     html.push_str("<table><tr><th>object</th><th>labels</th></tr>\n");

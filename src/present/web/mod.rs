@@ -13,11 +13,93 @@ pub(crate) mod labels_page;
 pub(crate) mod report_route;
 pub(crate) mod session;
 
-use std::io::Read;
 use std::net::{IpAddr, SocketAddr};
 use std::time::Duration;
 
 use anyhow::Context as _;
+
+/// How long a request's body may keep the server waiting (one shorter than its Content-Length,
+/// say) before it gets 408.
+pub(crate) const READ_TIMEOUT: Duration = Duration::from_secs(5);
+/// The socket read timeout within [`READ_TIMEOUT`]: each wait for body bytes ends this soon, and
+/// the deadline is checked between waits.
+const READ_POLL: Duration = Duration::from_millis(500);
+
+/// Gives the connection that `request` came on a read timeout, so that a body shorter than its
+/// Content-Length ends in 408 instead of holding the server. tiny_http hands out no socket, so
+/// the connection is found among the process's descriptors by its two addresses (Linux).
+fn limit_body_wait(request: &tiny_http::Request, local: SocketAddr, timeout: Duration) {
+    let Some(&remote) = request.remote_addr() else {
+        return;
+    };
+    let Ok(fds) = std::fs::read_dir("/proc/self/fd") else {
+        return;
+    };
+    let value = libc::timeval {
+        tv_sec: timeout.as_secs() as libc::time_t,
+        tv_usec: timeout.subsec_micros() as libc::suseconds_t,
+    };
+    for fd in fds
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse::<i32>().ok())
+    {
+        if socket_address(fd, libc::getpeername) == Some(remote)
+            && socket_address(fd, libc::getsockname).is_some_and(|a| a.port() == local.port())
+        {
+            // SAFETY: `fd` is an open socket of this process (its addresses were just read);
+            // SO_RCVTIMEO takes a timeval of the size given.
+            unsafe {
+                libc::setsockopt(
+                    fd,
+                    libc::SOL_SOCKET,
+                    libc::SO_RCVTIMEO,
+                    (&value as *const libc::timeval).cast(),
+                    std::mem::size_of::<libc::timeval>() as libc::socklen_t,
+                );
+            }
+        }
+    }
+}
+
+/// A socket's own or peer address by `query` (getsockname or getpeername); `None` for a
+/// descriptor that is not an IP socket.
+fn socket_address(
+    fd: i32,
+    query: unsafe extern "C" fn(i32, *mut libc::sockaddr, *mut libc::socklen_t) -> i32,
+) -> Option<SocketAddr> {
+    // SAFETY: sockaddr_storage is plain data that may be zeroed, and large enough for any
+    // address the call writes; the length tells the call its size.
+    let mut storage: libc::sockaddr_storage = unsafe { std::mem::zeroed() };
+    let mut len = std::mem::size_of::<libc::sockaddr_storage>() as libc::socklen_t;
+    // SAFETY: the pointers are to the storage and its length, valid for the call.
+    if unsafe {
+        query(
+            fd,
+            (&mut storage as *mut libc::sockaddr_storage).cast(),
+            &mut len,
+        )
+    } != 0
+    {
+        return None;
+    }
+    match i32::from(storage.ss_family) {
+        libc::AF_INET => {
+            // SAFETY: the family says the storage holds a sockaddr_in.
+            let a: libc::sockaddr_in =
+                unsafe { std::ptr::read((&storage as *const libc::sockaddr_storage).cast()) };
+            let ip = std::net::Ipv4Addr::from(u32::from_be(a.sin_addr.s_addr));
+            Some(SocketAddr::new(ip.into(), u16::from_be(a.sin_port)))
+        }
+        libc::AF_INET6 => {
+            // SAFETY: the family says the storage holds a sockaddr_in6.
+            let a: libc::sockaddr_in6 =
+                unsafe { std::ptr::read((&storage as *const libc::sockaddr_storage).cast()) };
+            let ip = std::net::Ipv6Addr::from(a.sin6_addr.s6_addr);
+            Some(SocketAddr::new(ip.into(), u16::from_be(a.sin6_port)))
+        }
+        _ => None,
+    }
+}
 
 /// The largest request body accepted; the API's bodies are a few dozen bytes.
 pub(crate) const MAX_BODY_BYTES: usize = 16 * 1024;
@@ -126,11 +208,12 @@ impl WebServer {
     /// Binds `host:port` (port 0 picks a free one).
     pub(crate) fn bind(host: IpAddr, port: u16) -> anyhow::Result<Self> {
         let wanted = SocketAddr::new(host, port);
-        let server = tiny_http::Server::http(wanted).map_err(|e| {
+        let refused = |e: &dyn std::fmt::Display| {
             anyhow::anyhow!(
                 "cannot serve on {wanted}: {e} (pick another --port, or 0 for any free one)"
             )
-        })?;
+        };
+        let server = tiny_http::Server::http(wanted).map_err(|e| refused(&e))?;
         let address = server
             .server_addr()
             .to_ip()
@@ -188,6 +271,7 @@ impl WebServer {
                     continue;
                 }
             };
+            limit_body_wait(&request, self.address, READ_POLL);
             let reply = match self.guard(&request).and_then(|()| read_body(&mut request)) {
                 Ok(body) => route(
                     &Request {
@@ -268,17 +352,44 @@ fn route(request: &Request, routes: &[&Route<'_>]) -> Reply {
 
 /// Reads at most [`MAX_BODY_BYTES`] + 1 bytes of the body; more is a 413.
 fn read_body(request: &mut tiny_http::Request) -> Result<Vec<u8>, Reply> {
+    let start = std::time::Instant::now();
+    let reader = request.as_reader();
     let mut body = Vec::new();
-    request
-        .as_reader()
-        .take(MAX_BODY_BYTES as u64 + 1)
-        .read_to_end(&mut body)
-        .map_err(|e| Reply::error(400, &format!("reading the body: {e}")))?;
-    if body.len() > MAX_BODY_BYTES {
-        return Err(Reply::error(
-            413,
-            &format!("the body is larger than {MAX_BODY_BYTES} bytes"),
-        ));
+    let mut chunk = [0u8; 4096];
+    loop {
+        match reader.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => {
+                body.extend_from_slice(&chunk[..n]);
+                if body.len() > MAX_BODY_BYTES {
+                    return Err(Reply::error(
+                        413,
+                        &format!("the body is larger than {MAX_BODY_BYTES} bytes"),
+                    ));
+                }
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) && start.elapsed() < READ_TIMEOUT => {}
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut
+                ) =>
+            {
+                return Err(Reply::error(
+                    408,
+                    &format!(
+                        "the body stopped short of its Content-Length for {} s",
+                        READ_TIMEOUT.as_secs()
+                    ),
+                ))
+            }
+            Err(e) => return Err(Reply::error(400, &format!("reading the body: {e}"))),
+        }
     }
     Ok(body)
 }

@@ -339,7 +339,16 @@ impl LabelSession {
                 },
             ));
         };
-        if body.get("round_id").and_then(|v| v.as_u64()) != Some(round.id) {
+        let Some(round_id) = body.get("round_id") else {
+            return Err(Reply::error(
+                400,
+                &format!(
+                    "the confirm body needs \"round_id\" (the round on show is {})",
+                    round.id
+                ),
+            ));
+        };
+        if round_id.as_u64() != Some(round.id) {
             return Err(Reply::error(
                 409,
                 &format!(

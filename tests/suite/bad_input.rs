@@ -1,0 +1,715 @@
+//! Every bad input a user can give, in one table: the command line, the exit status it must end
+//! with, a phrase its one-line message must hold (and one it must not), run against one small
+//! real workspace (the reference fixture's labels and a one-epoch model). The HTTP cases of the
+//! labelling page close the file, with the status they must get.
+//!
+//! Read-only folders are read-only for root too: as root the command runs under `setpriv` with
+//! CAP_DAC_OVERRIDE dropped from its bounding set, as an ordinary user would run it.
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+use crate::common::{assert_ok, graspmap};
+
+const BIN: &str = env!("CARGO_BIN_EXE_graspmap");
+
+/// How a case runs.
+#[derive(Clone, Copy, PartialEq)]
+enum How {
+    /// As is.
+    Plain,
+    /// Without the right to write read-only folders (dropped as root).
+    Unprivileged,
+    /// SIGINT after this many seconds.
+    InterruptAfter(u64),
+    /// The reader of stdout goes away after the first line (`| head -1`).
+    FirstLineOnly,
+    /// While this process holds the labels' writer lock, as a running `label` would.
+    LabelsLocked,
+}
+
+/// One row: the arguments (`{data}`, `{fresh}`, `{ro}`, `{tmp}` filled in), the exit status,
+/// a phrase the output must hold, one it must not ("" for none), and how it runs.
+struct Case {
+    args: &'static str,
+    code: i32,
+    phrase: &'static str,
+    absent: &'static str,
+    how: How,
+}
+
+const fn case(args: &'static str, code: i32, phrase: &'static str) -> Case {
+    Case {
+        args,
+        code,
+        phrase,
+        absent: "",
+        how: How::Plain,
+    }
+}
+
+impl Case {
+    const fn without(mut self, absent: &'static str) -> Self {
+        self.absent = absent;
+        self
+    }
+
+    const fn how(mut self, how: How) -> Self {
+        self.how = how;
+        self
+    }
+}
+
+/// The rows, in the order they run (a few build on the one before: the resume reads what the
+/// interrupted sweep kept).
+const CASES: &[Case] = &[
+    // Nothing trained is replaced silently.
+    case(
+        "--data {data} train --epochs 2 --batch-size 2 --lr 0.002",
+        2,
+        "already holds a trained model",
+    )
+    .without("--checkpoint"),
+    case(
+        "--data {data} train --epochs 2 --batch-size 2 --lr 0.002",
+        2,
+        "--force",
+    ),
+    case(
+        "--data {data} train --epochs 1 --batch-size 2",
+        0,
+        "already trained 1 epoch (",
+    ),
+    case("--data {data} train --resume --force", 2, "--force"),
+    case(
+        "--data {data} train --epochs 1 --batch-size 2",
+        2,
+        "wait for it to finish",
+    )
+    .how(How::LabelsLocked),
+    case(
+        "--data {fresh} train --epochs 1 --batch-size 2 --force",
+        0,
+        "best.prev.safetensors",
+    ),
+    case(
+        "--data {truncated} train --resume --batch-size 2",
+        2,
+        "--force",
+    )
+    .without("--checkpoint"),
+    case(
+        "--data {fresh} train --epochs 1 --batch-size 2 --force",
+        0,
+        "trained 1 epoch on 4 labels",
+    )
+    .without("1 epochs"),
+    case("--help", 0, "Usage: graspmap"),
+    case("train --help", 0, "[default: 30]"),
+    // Every global flag means something, or is refused.
+    case(
+        "--data {data} --split {tmp}/split_both.json train",
+        2,
+        "--split is not used by `graspmap train`",
+    ),
+    case(
+        "--data {data} --objects-dir {tmp}/empty train",
+        2,
+        "--objects-dir is not used",
+    ),
+    case(
+        "--data {data} --split {tmp}/split_both.json report",
+        2,
+        "--split is not used",
+    ),
+    case(
+        "--data {data} --split {tmp}/split_both.json predict --image {tmp}/grey.png",
+        2,
+        "--split is not used",
+    ),
+    case(
+        "--split {tmp}/split_both.json scene --objects YcbPear --out {tmp}/s.png",
+        2,
+        "--split is not used",
+    ),
+    case(
+        "--split {tmp}/split_both.json bench train --no-peer",
+        2,
+        "--split is not used",
+    ),
+    case(
+        "--data {data} --split {tmp}/split_truncated.json label --check",
+        2,
+        "split_truncated.json",
+    ),
+    case(
+        "--data {data} --split {tmp}/split_truncated.json eval --task test --policy random",
+        2,
+        "split_truncated.json",
+    ),
+    case(
+        "--data {data} --split {tmp}/split_both.json eval --task test --policy random",
+        2,
+        "in both the train and the test list",
+    ),
+    case(
+        "--data {data} --split {tmp}/split_twice.json eval --task train --policy random",
+        2,
+        "listed twice",
+    ),
+    case(
+        "--data {data} --split {tmp}/split_unknown.json eval --task test --policy random",
+        2,
+        "'YcbRubberDuck', which is not an object",
+    ),
+    // Outputs are checked before the work starts, and each OS error is said once.
+    case(
+        "--data {ro} eval --task test --policy random",
+        2,
+        "cannot write",
+    )
+    .how(How::Unprivileged)
+    .without("objects moved"),
+    case(
+        "--data {ro} --json {tmp}/out.json eval --task test --policy random",
+        2,
+        "reports",
+    )
+    .how(How::Unprivileged),
+    case("--data {ro} label", 2, "make it writable")
+        .how(How::Unprivileged)
+        .without(".lock"),
+    case("--data {ro} train --epochs 1", 2, "cannot write")
+        .how(How::Unprivileged)
+        .without("denied (os error"),
+    case(
+        "--data {data} --json {tmp}/missing/r.json eval --task test --policy random",
+        2,
+        "does not exist",
+    ),
+    case("--data {data} --json {tmp} train", 2, "is a directory"),
+    case(
+        "scene --objects YcbPear --out {tmp}/missing/s.png",
+        2,
+        "does not exist",
+    ),
+    case("scene --objects YcbPear --out {tmp}", 2, "is a directory"),
+    case(
+        "scene --objects YcbPear --out {tmp}/s.png --depth {tmp}/missing/d.png",
+        2,
+        "--depth",
+    ),
+    case(
+        "grasp --object YcbPear --oracle --record {tmp}/missing/g.mp4",
+        2,
+        "does not exist",
+    ),
+    case(
+        "grasp --object YcbPear --oracle --image {tmp}/missing/g.png",
+        2,
+        "--image",
+    ),
+    case(
+        "--data {data} predict --image {tmp}/photo.png --out {tmp}/missing/p.png",
+        2,
+        "does not exist",
+    ),
+    case(
+        "--data {data} report --out {tmp}/missing/r.html",
+        2,
+        "does not exist",
+    ),
+    case(
+        "--data {data} eval --task test --policy random --record {tmp}/missing/e.mp4",
+        2,
+        "--record",
+    ),
+    case("--data {ro} report --out {ro}/r.html", 2, "cannot write").how(How::Unprivileged),
+    // Finite numbers only, within their documented range.
+    case(
+        "grasp --object YcbPear --pixel 64,64 --angle 1e40",
+        2,
+        "from -360 to 360",
+    ),
+    case(
+        "grasp --object YcbPear --pixel 64,64 --angle nan",
+        2,
+        "--angle",
+    ),
+    case(
+        "grasp --object YcbPear --pixel 64,64 --angle inf",
+        2,
+        "--angle",
+    ),
+    case(
+        "grasp --object YcbPear --pixel 64,64 --angle -400",
+        2,
+        "from -360 to 360",
+    ),
+    case(
+        "--data {fresh} label --clicks {tmp}/clicks_huge.json",
+        2,
+        "from -360 to 360",
+    ),
+    case("--data {data} train --lr 1e40", 2, "--lr"),
+    case("--data {data} train --lr nan", 2, "--lr"),
+    case(
+        "--data {data} eval --task test --suppression-sigma 1e40",
+        2,
+        "--suppression-sigma",
+    ),
+    case(
+        "grasp --object YcbPear --oracle --grip-force 1e30",
+        2,
+        "--grip-force",
+    ),
+    case("grasp --object YcbPear --oracle --grip-force -3", 2, "-3"),
+    case(
+        "--data {fresh} label --click-noise-px 1e9",
+        2,
+        "--click-noise-px",
+    ),
+    case(
+        "--data {fresh} label --angle-noise-deg inf",
+        2,
+        "--angle-noise-deg",
+    ),
+    case(
+        "--data {data} eval --task test --verify-floor 1.5",
+        2,
+        "fraction from 0 to 1",
+    ),
+    // label --check checks everything label reads.
+    case("--data {bad_progress} label --check", 2, "progress.json"),
+    case("--data {short_progress} label --check", 2, "records"),
+    // Long runs say how long, and an interrupted sweep keeps its scenes.
+    case(
+        "--data {data} eval --task empty_bin --policy random --seeds 1-100000 --max-attempts 1",
+        130,
+        "100000 attempts in all",
+    )
+    .how(How::InterruptAfter(4)),
+    case(
+        "--data {data} eval --task empty_bin --policy random --seeds 1-2 --max-attempts 1 --resume",
+        0,
+        "already in",
+    ),
+    // The smaller slips.
+    case("--data {data} train --epochs -1", 2, "--epochs"),
+    case(
+        "--data {data} eval --task test --max-attempts -3",
+        2,
+        "--max-attempts",
+    ),
+    case("", 2, "no command given: choose one of scene"),
+    case("label --help", 0, "Collect verified grasp labels").how(How::FirstLineOnly),
+    case("--version", 0, "graspmap").how(How::FirstLineOnly),
+    case(
+        "--data {data} report --serve --port 0",
+        130,
+        "server stopped",
+    )
+    .how(How::InterruptAfter(3)),
+    case(
+        "--data {data} eval --task test --checkpoint {tmp}",
+        2,
+        "is a directory",
+    ),
+    case(
+        "--data {data} predict --image {tmp}/photo.png --checkpoint {tmp}",
+        2,
+        "is a directory",
+    ),
+    case(
+        "--data {data} predict --image {tmp}/grey.png",
+        2,
+        "8-bit greyscale",
+    )
+    .without("L8"),
+    case(
+        "--objects-dir {tmp}/empty scene --objects YcbPear --out {tmp}/s.png",
+        2,
+        "holds no objects",
+    ),
+    case("grasp --object Foo --oracle", 2, "unknown object 'Foo'").without("bundled:"),
+    case(
+        "--data {fresh} label --clicks {tmp}/clicks_test.json",
+        2,
+        "is a test object",
+    ),
+    case("eval --help", 0, "--n-past-action <N>"),
+    case(
+        "--data {data} eval --task test --n_past_action x",
+        2,
+        "--n-past-action",
+    ),
+    // Cases that worked before, kept working.
+    case(
+        "grasp --object YcbPear --pixel 128,3 --angle 0",
+        2,
+        "outside",
+    ),
+    case(
+        "grasp --object YcbPear --pixel 3 --angle 0",
+        2,
+        "two integers",
+    ),
+    case(
+        "--data {fresh} label --clicks {tmp}/missing.json",
+        2,
+        "missing.json",
+    ),
+    case("--data {data} predict --image {tmp}/small.png", 2, "64×64"),
+    case(
+        "--data {data} predict --image {tmp}/missing.png",
+        2,
+        "missing.png",
+    ),
+    case(
+        "--data {data} eval --task test --checkpoint {tmp}/corrupt.safetensors",
+        2,
+        "corrupt.safetensors",
+    ),
+    case("--data {tmp}/nothing eval --task test", 2, "not found"),
+    case(
+        "scene --objects YcbRubberDuck --out {tmp}/s.png",
+        2,
+        "unknown object 'YcbRubberDuck'",
+    ),
+    case(
+        "--threads 0 scene --objects YcbPear --out {tmp}/s.png",
+        2,
+        "--threads",
+    ),
+    case("--data {data} eval --task nope", 2, "nope"),
+    case("--data {data} train --batch-size 0", 2, "--batch-size"),
+    case("--data {fresh} label --per-object 0", 2, "--per-object"),
+    case(
+        "--objects-dir {tmp}/nowhere scene --objects YcbPear --out {tmp}/s.png",
+        2,
+        "not a directory",
+    ),
+    case(
+        "--data {data} eval --task test --verify-top 0 --verify-floor 0.25",
+        2,
+        "--verify-top 0",
+    ),
+    case(
+        "--data {data} eval --task test --verify-top 0 --verify-rejected 50",
+        2,
+        "--verify-top 0",
+    ),
+    case(
+        "--data {data} eval --task test --centring --collision-check walls",
+        2,
+        "--centring",
+    ),
+    case(
+        "--data {data} label --delete YcbHammer:99",
+        2,
+        "does not exist",
+    ),
+    case("--data {data} train --input rgbd", 2, "depth"),
+];
+
+/// The workspace the rows run in.
+struct Workspace {
+    tmp: tempfile::TempDir,
+    fresh: std::cell::Cell<u32>,
+}
+
+impl Workspace {
+    fn path(&self, name: &str) -> PathBuf {
+        self.tmp.path().join(name)
+    }
+
+    /// The reference fixture's four labels and a one-epoch model, plus every bad file a row
+    /// names.
+    fn new() -> Self {
+        let tmp = tempfile::tempdir().unwrap();
+        let ws = Workspace {
+            tmp,
+            fresh: std::cell::Cell::new(0),
+        };
+        let data = ws.path("data");
+        copy_labels(&data);
+        let data_text = data.to_str().unwrap();
+        assert_ok(&graspmap(&[
+            "--data",
+            data_text,
+            "--threads",
+            "2",
+            "train",
+            "--epochs",
+            "1",
+            "--batch-size",
+            "2",
+        ]));
+        let write = |name: &str, text: &str| std::fs::write(ws.path(name), text).unwrap();
+        write(
+            "split_both.json",
+            r#"{"train": ["YcbHammer"], "test": ["YcbHammer", "YcbPear"]}"#,
+        );
+        write(
+            "split_twice.json",
+            r#"{"train": ["YcbHammer", "YcbHammer"], "test": []}"#,
+        );
+        write(
+            "split_unknown.json",
+            r#"{"train": ["YcbHammer"], "test": ["YcbRubberDuck"]}"#,
+        );
+        write("split_truncated.json", r#"{"train": ["YcbHammer", "#);
+        write(
+            "clicks_huge.json",
+            r#"[{"object": "YcbHammer", "x": 64, "y": 64, "angle": 1e40}]"#,
+        );
+        write(
+            "clicks_test.json",
+            r#"[{"object": "YcbBanana", "x": 64, "y": 64, "angle": 0}]"#,
+        );
+        write("corrupt.safetensors", "not a checkpoint");
+        std::fs::create_dir_all(ws.path("empty")).unwrap();
+        image::GrayImage::from_pixel(128, 128, image::Luma([90]))
+            .save(ws.path("grey.png"))
+            .unwrap();
+        image::RgbImage::from_pixel(64, 64, image::Rgb([90, 20, 20]))
+            .save(ws.path("small.png"))
+            .unwrap();
+        image::RgbImage::from_pixel(128, 128, image::Rgb([90, 20, 20]))
+            .save(ws.path("photo.png"))
+            .unwrap();
+        // A read-only data dir holding labels and a model.
+        let ro = ws.path("ro");
+        copy_tree(&data, &ro);
+        set_read_only(&ro);
+        // A model whose resume state was cut short.
+        let truncated = ws.path("truncated");
+        copy_tree(&data, &truncated);
+        let last = truncated.join("affordance/last.safetensors");
+        let bytes = std::fs::read(&last).unwrap();
+        std::fs::write(&last, &bytes[..bytes.len() / 3]).unwrap();
+        // progress.json that does not parse, and one whose counts disagree with the labels.
+        for (name, text) in [
+            (
+                "bad_progress",
+                "{\"schema\": \"graspmap.label-progress/2\", \"seed\": ",
+            ),
+            (
+                "short_progress",
+                r#"{"schema": "graspmap.label-progress/2", "seed": 0, "rounds": [{"object": "YcbHammer", "rounds": 9, "labels": 5, "sources": []}]}"#,
+            ),
+        ] {
+            let dir = ws.path(name);
+            copy_labels(&dir);
+            std::fs::write(dir.join("labels/progress.json"), text).unwrap();
+        }
+        ws
+    }
+
+    /// A fresh copy of the base data dir, for a row that changes it.
+    fn fresh(&self) -> PathBuf {
+        let n = self.fresh.get() + 1;
+        self.fresh.set(n);
+        let dir = self.path(&format!("fresh{n}"));
+        copy_tree(&self.path("data"), &dir);
+        dir
+    }
+
+    /// The row's arguments with the workspace's paths filled in.
+    fn args(&self, row: &str) -> Vec<String> {
+        row.split_whitespace()
+            .map(|word| {
+                let mut word = word.replace("{tmp}", self.tmp.path().to_str().unwrap());
+                for name in ["data", "ro", "truncated", "bad_progress", "short_progress"] {
+                    word = word.replace(&format!("{{{name}}}"), self.path(name).to_str().unwrap());
+                }
+                if word.contains("{fresh}") {
+                    word = word.replace("{fresh}", self.fresh().to_str().unwrap());
+                }
+                word
+            })
+            .collect()
+    }
+}
+
+/// The reference fixture's labels as `dir/labels`.
+fn copy_labels(dir: &Path) {
+    let fixture = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/fixtures/reference-labels");
+    copy_tree(&fixture, &dir.join("labels"));
+}
+
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap().flatten() {
+        let target = to.join(entry.file_name());
+        if entry.path().is_dir() {
+            copy_tree(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), target).unwrap();
+        }
+    }
+}
+
+fn set_read_only(dir: &Path) {
+    use std::os::unix::fs::PermissionsExt;
+    for entry in std::fs::read_dir(dir).unwrap().flatten() {
+        if entry.path().is_dir() {
+            set_read_only(&entry.path());
+        }
+    }
+    std::fs::set_permissions(dir, std::fs::Permissions::from_mode(0o555)).unwrap();
+}
+
+/// The command for a row: as root and unprivileged, under setpriv without CAP_DAC_OVERRIDE.
+fn command(args: &[String], how: How) -> Command {
+    // SAFETY: geteuid only reads the process's effective user id.
+    let root = unsafe { libc::geteuid() } == 0;
+    let mut command = if how == How::Unprivileged && root {
+        assert!(
+            Path::new("/usr/bin/setpriv").exists(),
+            "the read-only cases need setpriv as root: apt-get install util-linux"
+        );
+        let mut c = Command::new("/usr/bin/setpriv");
+        c.args(["--bounding-set=-dac_override,-dac_read_search", "--", BIN]);
+        c
+    } else {
+        Command::new(BIN)
+    };
+    command.args(args).env_remove("GRASPMAP_LOG");
+    command
+}
+
+/// Runs one row and returns its output.
+fn run(ws: &Workspace, case: &Case) -> Output {
+    let args = ws.args(case.args);
+    let mut command = command(&args, case.how);
+    match case.how {
+        How::Plain | How::Unprivileged => command.output().unwrap(),
+        How::LabelsLocked => {
+            let _held =
+                graspmap::data::lock::StoreLock::acquire(&ws.path("data").join("labels"), "label")
+                    .unwrap();
+            command.output().unwrap()
+        }
+        How::InterruptAfter(seconds) => {
+            let child = command
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap();
+            std::thread::sleep(Duration::from_secs(seconds));
+            crate::common::send_signal(&child, libc::SIGINT);
+            child.wait_with_output().unwrap()
+        }
+        How::FirstLineOnly => {
+            let mut child = command
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped())
+                .spawn()
+                .unwrap();
+            let mut first = String::new();
+            BufReader::new(child.stdout.take().unwrap())
+                .read_line(&mut first)
+                .unwrap();
+            // The reader is gone: stdout is closed before the rest is written.
+            let mut stderr = Vec::new();
+            child
+                .stderr
+                .take()
+                .unwrap()
+                .read_to_end(&mut stderr)
+                .unwrap();
+            let status = child.wait().unwrap();
+            Output {
+                status,
+                stdout: first.into_bytes(),
+                stderr,
+            }
+        }
+    }
+}
+
+#[test]
+fn every_bad_input_gets_one_line_that_names_it_and_the_status_it_should() {
+    assert!(CASES.len() >= 60, "{} rows", CASES.len());
+    let ws = Workspace::new();
+    let mut failures = Vec::new();
+    for case in CASES {
+        let out = run(&ws, case);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        let both = format!("{stdout}{stderr}");
+        let code = out.status.code().unwrap_or(-1);
+        let mut wrong = Vec::new();
+        if code != case.code {
+            wrong.push(format!("exit {code}, expected {}", case.code));
+        }
+        if !both.contains(case.phrase) {
+            wrong.push(format!("no {:?}", case.phrase));
+        }
+        if !case.absent.is_empty() && both.contains(case.absent) {
+            wrong.push(format!("holds {:?}", case.absent));
+        }
+        if both.contains("panicked") {
+            wrong.push("panicked".into());
+        }
+        if case.code == 2 && stderr.trim_end().lines().count() != 1 {
+            wrong.push("the error is not one line".into());
+        }
+        if !wrong.is_empty() {
+            failures.push(format!(
+                "`graspmap {}`: {}\n  stdout: {}\n  stderr: {}",
+                case.args,
+                wrong.join("; "),
+                stdout.trim_end(),
+                stderr.trim_end()
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn the_labelling_page_refuses_a_confirm_without_its_round_and_times_out_a_short_body() {
+    let web = crate::web::WebLabeller::start(&["YcbTomatoSoupCan"], &["--per-object", "1"]);
+    web.wait_state(|s| s["round"].is_object());
+    // Rows: the request, the status it must get, a phrase of its message.
+    let rows: [(&str, u16, &str); 2] = [
+        ("{}", 400, "round_id"),
+        (r#"{"round_id": "x"}"#, 409, "not the round on show"),
+    ];
+    for (body, status, phrase) in rows {
+        let (got, text) = web.request("POST", "/api/confirm", Some(body));
+        assert_eq!(got, status, "{body}: {text}");
+        assert!(text.contains(phrase), "{body}: {text}");
+    }
+    // A Content-Length that the body never reaches: 408 within the server's timeout, not a
+    // connection held open. (tiny_http itself reads bodies of up to 1 KiB before the request
+    // reaches the server, with no timeout; such a stalled client holds one of its connection
+    // threads, and the server answers everyone else meanwhile.)
+    let stalled = |length: usize| {
+        let mut stream = std::net::TcpStream::connect(&web.address).unwrap();
+        stream
+            .set_read_timeout(Some(Duration::from_secs(30)))
+            .unwrap();
+        write!(
+            stream,
+            "POST /api/confirm HTTP/1.1\r\nHost: {}\r\nContent-Type: application/json\r\nContent-Length: {length}\r\n\r\n{{}}",
+            web.address
+        )
+        .unwrap();
+        stream
+    };
+    let small = stalled(100);
+    let start = Instant::now();
+    let mut reply = String::new();
+    let _ = stalled(5000).read_to_string(&mut reply);
+    let took = start.elapsed();
+    assert!(reply.starts_with("HTTP/1.1 408"), "{reply:?}");
+    assert!(took < Duration::from_secs(15), "{took:?}");
+    // The server still answers, with the small stalled request still open.
+    assert_eq!(web.request("GET", "/api/state", None).0, 200);
+    drop(small);
+}
