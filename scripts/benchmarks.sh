@@ -25,7 +25,7 @@ self=$(realpath "$0")
 cd "$(dirname "$self")/.."
 root=$(pwd)
 
-tables=(pipeline training pytorch latency workcell quality yardstick sweep collision depthtest
+tables=(pipeline training pytorch latency workcell quality yardstick sweep collision verification
   centring suppression variants labelling soak faults tests webpage video)
 
 describe() {
@@ -38,9 +38,9 @@ describe() {
     quality) echo "model, random and oracle on train, test and empty_bin, held-out seeds included" ;;
     yardstick) echo "the oracle with and without failure memory in empty_bin, against the model" ;;
     sweep) echo "scripts/grasp-sweep.sh oracle and random" ;;
-    collision) echo "--collision-check off, walls and full without the depth test" ;;
-    depthtest) echo "--verify-rejected 0, --verify-floor 0.25 and --verify-top 0 against the defaults" ;;
-    centring) echo "--centring without the depth test" ;;
+    collision) echo "--collision-check off, walls and full without verification" ;;
+    verification) echo "--verify-rejected 0, --verify-floor 0.25 and --verify-top 0 against the defaults" ;;
+    centring) echo "--centring without verification" ;;
     suppression) echo "failure suppression's parameters against the defaults" ;;
     variants) echo "scripts/variants.sh (rgb/rgbd input, clutter labels), with the floor and held-out seeds" ;;
     labelling) echo "label from an empty data dir with --threads 1 and the default, and a byte-identical rerun" ;;
@@ -94,7 +94,7 @@ export EPOCHS PER_OBJECT TEST_SEEDS HELD_TEST EMPTY_SEEDS HELD_EMPTY MAX_ATTEMPT
 
 out=$(realpath -m "${OUT:-target/benchmarks}")
 mkdir -p "$out/eval" "$out/logs"
-# Evaluations are shared between tables (quality, yardstick, depthtest, ... reuse the same runs)
+# Evaluations are shared between tables (quality, yardstick, verification, ... reuse the same runs)
 # within one invocation, never across invocations: a report counts only when its .run file holds
 # this run's id.
 run_id="$(date +%s)-$$"
@@ -358,7 +358,7 @@ t_collision() {
   done
 }
 
-t_depthtest() {
+t_verification() {
   local spec
   for spec in train test enp8 henp8; do
     ev model "$spec"
@@ -802,7 +802,7 @@ def t_collision():
         f"empty_bin, {seeds(E['EMPTY_SEEDS'])}, np8"], rows)
 
 
-def t_depthtest():
+def t_verification():
     head("Depth test", "`graspmap eval` with the defaults, `--verify-rejected 0`, `--verify-floor 0.25`, `--verify-top 0`.")
     rows, notes = [], []
     base = lambda s: ev(f"model-{s}")
