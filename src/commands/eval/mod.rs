@@ -5,8 +5,11 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{bail, Context as _};
+use anyhow::Context as _;
 use image::RgbImage;
+
+mod config;
+mod sweep;
 
 use super::Context;
 use crate::assets::objects::ObjectModel;
@@ -16,10 +19,9 @@ use crate::grasp::draw::draw_grasp;
 use crate::grasp::world::world_grasp;
 use crate::interrupt;
 use crate::model::inference::AffordanceModel;
-use crate::model::unet::Precision;
 use crate::named::{counted, Named};
 use crate::policy::baselines::{OraclePolicy, RandomPolicy};
-use crate::policy::model::{ModelPolicy, ModelPolicyConfig};
+use crate::policy::model::ModelPolicy;
 use crate::policy::suppression::{Suppression, SuppressionConfig};
 use crate::policy::PolicyKind;
 use crate::policy::{Observation, Policy};
@@ -31,40 +33,11 @@ use crate::present::eval_report::{
 use crate::present::video::save_video_atomic;
 use crate::sim::pick::{PickOutcome, PickReason};
 use crate::sim::{ObjectLocation, Workcell, WorkcellConfig};
-
-/// Attempts per object in the train and test tasks (the reference's).
-pub(crate) const ATTEMPTS_PER_OBJECT: u32 = 3;
-/// Offset of the train/test drop seeds (the reference's): seed + 100·i + a + 10000.
-pub(crate) const SINGLE_OBJECT_SEED_OFFSET: u64 = 10_000;
-/// Physics steps between episode video frames: 10 fps, so that a 25-attempt episode stays
-/// near 3 MB as MP4 (about 19 MB as GIF); `grasp --record` films one attempt at 24 fps.
-pub(crate) const EPISODE_EVERY_STEPS: u64 = 24;
-/// Everything one `graspmap eval` run needs, resolved and checked by the CLI.
-#[derive(Debug, Clone)]
-pub(crate) struct EvalConfig {
-    /// Which evaluation.
-    pub(crate) task: Task,
-    /// Who chooses the grasps.
-    pub(crate) policy: PolicyKind,
-    /// The model's weights (model policy).
-    pub(crate) checkpoint: PathBuf,
-    /// Arithmetic of the network.
-    pub(crate) precision: Precision,
-    /// Base seeds, run one after another and aggregated.
-    pub(crate) seeds: Vec<u64>,
-    /// Failure suppression (model policy).
-    pub(crate) suppression: SuppressionConfig,
-    /// The model policy's checks.
-    pub(crate) model: ModelPolicyConfig,
-    /// empty_bin: most pick attempts per scene. Default 25.
-    pub(crate) max_attempts: u32,
-    /// Where to write the episode video (one seed only).
-    pub(crate) record: Option<PathBuf>,
-    /// Skip the scenes that the `--json` report already holds.
-    pub(crate) resume: bool,
-    /// Check the physics invariants after every step (the soak test).
-    pub(crate) check_invariants: bool,
-}
+pub(crate) use config::{
+    EvalConfig, ATTEMPTS_PER_OBJECT, EPISODE_EVERY_STEPS, SINGLE_OBJECT_SEED_OFFSET,
+};
+pub(crate) use sweep::kept_report_path;
+use sweep::{announce_plan, finished_runs, keep_interrupted, resolved_config, resume_source};
 
 /// Settings shared by every scene of one evaluation.
 struct Evaluation<'a> {
@@ -217,97 +190,6 @@ fn finish(
     Ok(())
 }
 
-/// Where `eval` keeps its latest report of `task` and `policy`: `DATA/reports/eval_<task>_<policy>.json`.
-pub(crate) fn kept_report_path(data: &Path, task: Task, policy: PolicyKind) -> PathBuf {
-    data.join("reports")
-        .join(format!("eval_{}_{}.json", task.name(), policy.name()))
-}
-
-/// Writes the report of an interrupted sweep (the scenes finished so far) and says how to
-/// continue; returns the error that ends the command with the signal's status.
-fn keep_interrupted(
-    context: &Context,
-    config: &EvalConfig,
-    names: &[String],
-    runs: Vec<SceneRun>,
-    elapsed: f64,
-    interrupted: interrupt::Interrupted,
-) -> anyhow::Error {
-    let seeds = &config.seeds;
-    let written = (|| -> anyhow::Result<()> {
-        let kept = format!("{} of {} scenes", runs.len(), seeds.len());
-        let results = summarise(
-            config.task,
-            config.policy,
-            seeds.clone(),
-            names,
-            runs,
-            elapsed,
-            true,
-        );
-        // The finished scenes always stay under DATA/reports, where `--resume` finds them, and
-        // in the user's own --json copy when there is one.
-        let resolved = resolved_config(context, config, names);
-        let kept_path = kept_report_path(&context.data, config.task, config.policy);
-        let own = context.json.as_ref().filter(|j| *j != Path::new("-"));
-        for target in own.into_iter().chain(std::iter::once(&kept_path)) {
-            write_versioned_report(target, "eval", 2, seeds[0], &resolved, &results)?;
-        }
-        let place = own.unwrap_or(&kept_path);
-        context.say(&format!(
-            "{interrupted}: {kept} kept in {}; rerun the same command with --resume to finish the rest",
-            place.display()
-        ));
-        Ok(())
-    })();
-    match written {
-        Ok(()) => interrupted.into(),
-        Err(e) => e,
-    }
-}
-
-/// The report `--resume` continues: the user's `--json` file when there is one, else the copy
-/// kept under DATA/reports.
-fn resume_source<'a>(context: &'a Context, kept: &'a Path) -> &'a Path {
-    match context.json.as_deref() {
-        Some(json) if json != Path::new("-") => json,
-        _ => kept,
-    }
-}
-
-/// Typical wall seconds of one attempt on a 2-core machine, for the estimate printed before a
-/// long sweep (BENCHMARKS.md#attempt-latency): empty_bin attempts render, check and settle a
-/// full bin.
-fn typical_attempt_seconds(task: Task) -> f64 {
-    match task {
-        Task::EmptyBin => 0.8,
-        Task::Train | Task::Test => 0.4,
-    }
-}
-
-/// Says how many attempts a sweep plans and, when it will take more than about a minute, how
-/// long it should take.
-fn announce_plan(context: &Context, task: Task, per_scene: u64, scenes: usize) {
-    let attempts = per_scene * scenes as u64;
-    let seconds = attempts as f64 * typical_attempt_seconds(task);
-    if context.quiet || seconds < 60.0 {
-        return;
-    }
-    let hours = seconds / 3600.0;
-    let estimate = if hours >= 1.0 {
-        format!("{hours:.1} h")
-    } else {
-        format!("{:.0} min", seconds / 60.0)
-    };
-    eprintln!(
-        "eval: {} of up to {}, {attempts} attempts in all: about {estimate} at {} s an attempt; \
-         Ctrl-C keeps the finished scenes, --resume continues",
-        counted(scenes, "scene"),
-        counted(per_scene as usize, "attempt"),
-        typical_attempt_seconds(task)
-    );
-}
-
 /// The policy that chooses the grasps, with its model loaded when it needs one.
 fn policy(config: &EvalConfig) -> anyhow::Result<Box<dyn Policy>> {
     Ok(match config.policy {
@@ -317,69 +199,6 @@ fn policy(config: &EvalConfig) -> anyhow::Result<Box<dyn Policy>> {
         )?),
         PolicyKind::Random => Box::new(RandomPolicy),
         PolicyKind::Oracle => Box::new(OraclePolicy),
-    })
-}
-
-/// The scenes that an earlier report of the same evaluation holds, for `--resume`: those of
-/// this run's seeds, checked to come from the same task, policy and settings.
-fn finished_runs(report: &Path, config: &EvalConfig) -> anyhow::Result<Vec<SceneRun>> {
-    if !report.is_file() {
-        return Ok(Vec::new());
-    }
-    let text = std::fs::read_to_string(report)
-        .with_context(|| format!("reading the report to resume, {}", report.display()))?;
-    let bad = || {
-        format!(
-            "{} is not a graspmap eval report to resume from (delete it, or drop --resume)",
-            report.display()
-        )
-    };
-    let value: serde_json::Value = serde_json::from_str(&text).with_context(bad)?;
-    let schema = value["schema"].as_str().unwrap_or_default();
-    if !matches!(schema, "graspmap.eval/1" | "graspmap.eval/2") {
-        bail!("{}: schema '{schema}'", bad());
-    }
-    for (key, now) in [
-        ("task", config.task.name()),
-        ("policy", config.policy.name()),
-    ] {
-        let then = value["config"][key].as_str().unwrap_or_default();
-        if then != now {
-            bail!(
-                "{} ran --{key} {then}, this run --{key} {now}; resume with the same settings",
-                report.display()
-            );
-        }
-    }
-    let runs: Vec<SceneRun> =
-        serde_json::from_value(value["results"]["runs"].clone()).with_context(bad)?;
-    Ok(runs
-        .into_iter()
-        .filter(|r| config.seeds.contains(&r.seed))
-        .collect())
-}
-
-/// The configuration as the report records it.
-fn resolved_config(context: &Context, config: &EvalConfig, names: &[String]) -> serde_json::Value {
-    let model = config.policy == PolicyKind::Model;
-    serde_json::json!({
-        "global": context,
-        "task": config.task,
-        "policy": config.policy,
-        "checkpoint": model.then_some(&config.checkpoint),
-        "precision": model.then_some(config.precision),
-        "seeds": config.seeds,
-        "suppression": config.suppression,
-        "collision_check": model.then_some(config.model.check),
-        "verify_top": model.then_some(config.model.verify_top),
-        "verify_floor": model.then_some(config.model.verify_floor),
-        "verify_rejected": model.then_some(config.model.verify_rejected),
-        "centring": model && config.model.centring,
-        "max_attempts": config.max_attempts,
-        "attempts_per_object": ATTEMPTS_PER_OBJECT,
-        "objects": names,
-        "workcell": WorkcellConfig::default(),
-        "record": config.record,
     })
 }
 

@@ -1,0 +1,44 @@
+//! What one `graspmap eval` run does, as the CLI resolves it, and the reference's constants of
+//! the tasks.
+
+use std::path::PathBuf;
+
+use crate::model::unet::Precision;
+use crate::policy::model::ModelPolicyConfig;
+use crate::policy::suppression::SuppressionConfig;
+use crate::policy::PolicyKind;
+use crate::present::eval_report::Task;
+
+/// Attempts per object in the train and test tasks (the reference's).
+pub(crate) const ATTEMPTS_PER_OBJECT: u32 = 3;
+/// Offset of the train/test drop seeds (the reference's): seed + 100·i + a + 10000.
+pub(crate) const SINGLE_OBJECT_SEED_OFFSET: u64 = 10_000;
+/// Physics steps between episode video frames: 10 fps, so that a 25-attempt episode stays
+/// near 3 MB as MP4 (about 19 MB as GIF); `grasp --record` films one attempt at 24 fps.
+pub(crate) const EPISODE_EVERY_STEPS: u64 = 24;
+/// Everything one `graspmap eval` run needs, resolved and checked by the CLI.
+#[derive(Debug, Clone)]
+pub(crate) struct EvalConfig {
+    /// Which evaluation.
+    pub(crate) task: Task,
+    /// Who chooses the grasps.
+    pub(crate) policy: PolicyKind,
+    /// The model's weights (model policy).
+    pub(crate) checkpoint: PathBuf,
+    /// Arithmetic of the network.
+    pub(crate) precision: Precision,
+    /// Base seeds, run one after another and aggregated.
+    pub(crate) seeds: Vec<u64>,
+    /// Failure suppression (model policy).
+    pub(crate) suppression: SuppressionConfig,
+    /// The model policy's checks.
+    pub(crate) model: ModelPolicyConfig,
+    /// empty_bin: most pick attempts per scene. Default 25.
+    pub(crate) max_attempts: u32,
+    /// Where to write the episode video (one seed only).
+    pub(crate) record: Option<PathBuf>,
+    /// Skip the scenes that the `--json` report already holds.
+    pub(crate) resume: bool,
+    /// Check the physics invariants after every step (the soak test).
+    pub(crate) check_invariants: bool,
+}
