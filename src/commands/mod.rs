@@ -59,12 +59,15 @@ impl Context {
     }
 
     /// Prints a human-readable result line: to stdout, unless the JSON report goes there.
+    /// A reader that went away (`graspmap eval ... | head -1`) is no error: the command goes on
+    /// and still writes its files, it only stops printing.
     pub(crate) fn say(&self, line: &str) {
-        if self.json.as_deref() == Some(Path::new("-")) {
-            eprintln!("{line}");
+        use std::io::Write;
+        let _ = if self.json.as_deref() == Some(Path::new("-")) {
+            writeln!(std::io::stderr().lock(), "{line}")
         } else {
-            println!("{line}");
-        }
+            writeln!(std::io::stdout().lock(), "{line}")
+        };
     }
 
     /// A progress bar with ETA over `len` `unit`s, `done` already: drawn on a terminal,

@@ -307,6 +307,13 @@ const CASES: &[Case] = &[
     case("label --help", 0, "Collect verified grasp labels").how(How::FirstLineOnly),
     case("--version", 0, "graspmap").how(How::FirstLineOnly),
     case(
+        "--data {data} eval --task empty_bin --policy oracle --max-attempts 3",
+        0,
+        "objects moved",
+    )
+    .how(How::FirstLineOnly)
+    .without("panicked"),
+    case(
         "--data {data} report --serve --port 0",
         130,
         "server stopped",
