@@ -252,7 +252,7 @@ async fn a_person_labels_a_small_dataset_in_the_browser_with_mouse_and_keys_only
     let _ = std::fs::remove_file(shot_path());
     let profile = tempfile::tempdir().unwrap();
     let client = browser(&driver, profile.path()).await;
-    let web = WebLabeller::start(&TRAIN, &["--per-object", "2"]);
+    let mut web = WebLabeller::start(&TRAIN, &["--per-object", "2"]);
 
     let started = Instant::now();
     client
@@ -310,19 +310,23 @@ async fn a_person_labels_a_small_dataset_in_the_browser_with_mouse_and_keys_only
     .unwrap();
 
     // The dataset passes --check and trains.
+    let (data, split) = (web.data(), web.dir.path().join("split.json"));
     let run = |args: &[&str]| {
         let mut command = Command::new(BIN);
-        command.arg("--data").arg(web.data());
+        command.arg("--data").arg(&data);
         // Only label and eval read the split; the other commands refuse the flag.
         if matches!(args.first(), Some(&"label" | &"eval")) {
-            command
-                .arg("--split")
-                .arg(web.dir.path().join("split.json"));
+            command.arg("--split").arg(&split);
         }
         command.args(args).output().unwrap()
     };
     let check = run(&["label", "--check"]);
     assert!(check.status.success(), "{check:?}");
+    // Training waits for the labeller: the page's server holds the labels' lock until Ctrl-C.
+    let refused = run(&["train", "--epochs", "1"]);
+    assert_eq!(refused.status.code(), Some(2), "{refused:?}");
+    // Every label is in, so the stopped labeller reports success.
+    assert_eq!(web.stop().status.code(), Some(0));
     let train = run(&["train", "--epochs", "1"]);
     assert!(train.status.success(), "{train:?}");
     assert!(web.data().join("affordance/best.safetensors").exists());
