@@ -803,7 +803,7 @@ def t_collision():
 
 
 def t_verification():
-    head("Depth test", "`graspmap eval` with the defaults, `--verify-rejected 0`, `--verify-floor 0.25`, `--verify-top 0`.")
+    head("Verification", "`graspmap eval` with the defaults, `--verify-rejected 0`, `--verify-floor 0.25`, `--verify-top 0`.")
     rows, notes = [], []
     base = lambda s: ev(f"model-{s}")
     for tag, label in (("", "defaults"), ("vr0", "`--verify-rejected 0`"), ("vf25", "`--verify-floor 0.25`"),
