@@ -6,6 +6,8 @@
 # Usage: scripts/soak.sh N [M] [SEED]   (M model scenes, default N/10; SEED picks the scenes)
 #   GRASPMAP=path/to/graspmap  use that binary instead of building target/release/graspmap
 #   DATA=DIR  the data dir whose model the model scenes use (default data, as ./demo.sh leaves it)
+#   OBJECTS_DIR=DIR  the scenes' objects from DIR (--objects-dir, e.g. the public YCB meshes) and
+#     its split.json, instead of the 15 bundled ones
 # Prints each violation with the seed and attempt that reproduce it, and exits 1 if any.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -14,11 +16,13 @@ m=${2:-$((n / 10))}
 seed=${3:-$RANDOM}
 bin=${GRASPMAP:-target/release/graspmap}
 data=${DATA:-data}
+objects=()
+if [ -n "${OBJECTS_DIR:-}" ]; then objects=(--objects-dir "$OBJECTS_DIR"); fi
 [ -x "$bin" ] || cargo build --release --locked
 out=$(mktemp -d)
 # Distinct seeds from one generator, so a run is repeatable from its SEED.
 seeds() { python3 -c "import random; r = random.Random($seed); print(','.join(str(s) for s in r.sample(range(1, 10**9), $1)))"; }
-echo "soak: $n random-policy scenes and $m model scenes, seed $seed, reports in $out" >&2
+echo "soak: $n random-policy scenes and $m model scenes, seed $seed, objects ${OBJECTS_DIR:-bundled}, reports in $out" >&2
 status=0
 sweep() {
   local policy=$1 count=$2 list
@@ -30,7 +34,7 @@ sweep() {
   for chunk in "${all[*]:0:$half}" "${all[*]:$half}"; do
     [ -n "$chunk" ] || continue
     part=$((part + 1))
-    "$bin" --data "$data" --quiet --threads 1 --json "$out/$policy-$part.json" eval --task empty_bin \
+    "$bin" --data "$data" ${objects[@]+"${objects[@]}"} --quiet --threads 1 --json "$out/$policy-$part.json" eval --task empty_bin \
       --policy "$policy" --seeds "${chunk// /,}" --check-invariants \
       >"$out/$policy-$part.log" 2>"$out/$policy-$part.err" &
     pids+=($!)

@@ -75,6 +75,10 @@ pub(crate) struct AttemptRecord {
     pub(crate) aimed_at: Option<String>,
     /// The object that was held, if any.
     pub(crate) held: Option<String>,
+    /// After a success: where the held object came to rest (`bin2` when placed; `bin1` or
+    /// `lost` when it ended elsewhere). Absent for a failure, and in reports from before it.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) placed: Option<ObjectLocation>,
     /// empty_bin: objects in bin 2 after this attempt.
     pub(crate) moved: Option<usize>,
     /// Where the visualisation went.

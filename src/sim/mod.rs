@@ -8,6 +8,7 @@ mod invariants;
 pub(crate) mod kinematics;
 mod penetration;
 pub mod pick;
+mod place;
 pub(crate) mod robot;
 mod shapes;
 mod stepping;
@@ -86,6 +87,9 @@ pub(crate) struct SceneObject {
     pub(crate) collider: ColliderHandle,
     /// Mask id in rendered frames (index + 1).
     pub(crate) id: u16,
+    /// Its centre of mass in its body's frame (uniform density), which locates it: a mesh's
+    /// frame can lie outside the object (the public YCB clamp's lies 28–57 mm below its mesh).
+    pub(crate) centre: Vector,
 }
 
 /// Where an object ended up: resting inside a tote's inner volume, or lost.
@@ -111,6 +115,8 @@ pub struct Workcell {
     steps: u64,
     recorder: Option<Recorder>,
     camera: Camera,
+    /// The camera over bin 2, which the place reads.
+    place_camera: Camera,
     /// The invariant violations seen so far, when watching for them.
     violations: Option<Vec<String>>,
     /// What the workcell is doing, for the violations' messages.
@@ -156,6 +162,7 @@ impl Workcell {
             steps: 0,
             recorder: None,
             camera: Camera::top_down(),
+            place_camera: Camera::place_top_down(),
             violations: None,
             phase: "idle",
             arm_held: true,
@@ -233,8 +240,10 @@ impl Workcell {
                 // can keeps rolling across the bin long after the camera image is taken.
                 .angular_damping(OBJECT_ANGULAR_DAMPING),
         );
+        let shape = SharedShape::compound(shapes);
+        let centre = shape.mass_properties(1.0).local_com;
         let collider = self.world.insert_collider(
-            ColliderBuilder::new(SharedShape::compound(shapes))
+            ColliderBuilder::new(shape)
                 .mass(model.mass)
                 .friction(model.friction)
                 .friction_combine_rule(CoefficientCombineRule::Multiply)
@@ -248,6 +257,7 @@ impl Workcell {
             body,
             collider,
             id,
+            centre,
         });
         Ok(self.objects.len() - 1)
     }
@@ -330,9 +340,18 @@ impl Workcell {
         crate::vision::render::render(&self.camera, &self.drawables())
     }
 
-    /// Where an object is, by its centre: inside a tote's inner volume, or lost.
+    /// An object's centre of mass in the world.
+    pub fn object_centre(&self, index: usize) -> Vector {
+        self.object_pose(index)
+            .transform_point(self.objects[index].centre)
+    }
+
+    /// Where an object is, by its centre of mass: inside a tote's inner volume, or lost. Not by
+    /// its body's origin, which a mesh can put outside the object: the public YCB clamp resting
+    /// upright on a floor had its origin 10 mm under the floor's top, and counted as lost from
+    /// either bin.
     pub fn locate(&self, index: usize) -> ObjectLocation {
-        let p = self.object_pose(index).translation;
+        let p = self.object_centre(index);
         let inside = |tote: &Tote| {
             (p.x - tote.center[0]).abs() <= tote.inner_half[0]
                 && (p.y - tote.center[1]).abs() <= tote.inner_half[1]
@@ -575,6 +594,34 @@ mod tests {
             floor_pixels > 5000,
             "only {floor_pixels} pixels see the floor"
         );
+    }
+
+    #[test]
+    fn objects_are_located_by_their_centre_of_mass_not_their_frame() {
+        // A plate whose frame lies 40 mm below it, as the public YCB clamp's lies below its mesh.
+        let plate = ObjectModel {
+            name: "Plate".into(),
+            mass: 0.1,
+            friction: 0.5,
+            collisions: vec![crate::assets::urdf::Collision {
+                shape: crate::assets::urdf::CollisionShape::Cuboid {
+                    half_extents: Vector::new(0.04, 0.04, 0.01),
+                },
+                pose: Pose::from_translation(Vector::new(0.0, 0.0, 0.04)),
+            }],
+            visuals: Vec::new(),
+        };
+        let mut cell = Workcell::new(&WorkcellConfig::default()).unwrap();
+        for (x, expected) in [(0.5, ObjectLocation::Bin1), (-0.5, ObjectLocation::Bin2)] {
+            // Lying on the floor, its frame 10 mm under the floor's top.
+            let frame = Vector::new(x, 0.0, tote::FLOOR_TOP + 0.01 - 0.04);
+            let i = cell
+                .add_object(&plate, Pose::from_translation(frame))
+                .unwrap();
+            assert_eq!(cell.locate(i), expected);
+            let centre = cell.object_centre(i);
+            assert!((centre - (frame + Vector::new(0.0, 0.0, 0.04))).length() < 1e-6);
+        }
     }
 
     #[test]

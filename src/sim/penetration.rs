@@ -1,6 +1,7 @@
 //! How deep a body is inside one of the scenery's fixed boxes: parry's exact query, part by part,
 //! bounded by the depth along the box's own axes; and the hook that drops the narrow phase's
-//! contacts that claim more depth than that bound allows.
+//! contacts with a box (of the scenery or of the hand) that claim more depth than that bound
+//! allows.
 
 use rapier3d::math::{Pose, Vector};
 use rapier3d::parry::shape::Shape;
@@ -52,20 +53,23 @@ pub(crate) fn penetration(
     }
 }
 
-/// Solver contacts with a fixed box no deeper than this (m) are never second-guessed, so the
-/// bound below is only computed for the rare deep ones.
+/// Solver contacts with a box no deeper than this (m) are never second-guessed, so the bound
+/// below is only computed for the rare deep ones.
 const MISFIRE_SCREEN: f32 = 0.002;
 /// How far past the box-axes bound a contact's depth may read before it counts as a misfire (m).
 /// The bound is never less than the true depth; the margin absorbs the clipped points of a
 /// manifold whose normal is a little off the box's face.
 const MISFIRE_MARGIN: f32 = 0.002;
 
-/// Drops, for one step, a manifold between a fixed box and a body part whose solver contacts read
-/// deeper than any push along the box's axes needs to separate them. Parry's penetration step
-/// misfires now and then on a flat face resting on a box: it gave a convex part of the scissors,
-/// lying at rest in bin 2, a floor contact with a slanted normal at 33.7 mm depth, and the solver
-/// tipped them 9 mm into the floor in one step (BENCHMARKS.md#physics-soak). The part's other
-/// contacts, and the next step's fresh ones, carry it as before.
+/// Drops, for one step, a manifold between a box (of the scenery, or of the hand: palm, finger
+/// links and pads) and a dynamic body's part whose solver contacts read deeper than any push
+/// along the box's axes needs to separate them. Parry's penetration step misfires now and then
+/// on a flat face against a box: it gave a convex part of the scissors, lying at rest in bin 2, a
+/// floor contact with a slanted normal at 33.7 mm depth, and the solver tipped them 9 mm into
+/// the floor in one step (BENCHMARKS.md#physics-soak). Between a pad and a held pear it read
+/// 18-21 mm with the normal turned by 65 degrees, and the impulse spun the pear out of the jaw on
+/// the way to bin 2 (docs/grasping.md, "Placing"). The part's other contacts, and the next
+/// step's fresh ones, carry it as before.
 pub(super) struct DropMisfiredContacts;
 
 impl PhysicsHooks for DropMisfiredContacts {
@@ -86,15 +90,16 @@ impl PhysicsHooks for DropMisfiredContacts {
             &context.colliders[context.collider2],
         );
         // Only a dynamic body is pushed by the solver; the kinematic arm's contacts are read by
-        // the guards from the manifold points, which this leaves alone.
+        // the guards from the manifold points, which this leaves alone. A pad is dynamic and a
+        // box: against a held object either side may be the box.
         let dynamic = |c: &Collider| {
             c.parent()
                 .is_some_and(|p| context.bodies[p].body_type() == RigidBodyType::Dynamic)
         };
         let (m1, m2) = (contacts.manifold.subshape1, contacts.manifold.subshape2);
-        let misfired = if is_fixed_box(c1) && dynamic(c2) {
+        let misfired = if is_box(c1) && dynamic(c2) {
             exceeds_box_axes_depth(c1, c2, m2, deepest)
-        } else if is_fixed_box(c2) && dynamic(c1) {
+        } else if is_box(c2) && dynamic(c1) {
             exceeds_box_axes_depth(c2, c1, m1, deepest)
         } else {
             false
@@ -103,21 +108,22 @@ impl PhysicsHooks for DropMisfiredContacts {
             tracing::debug!(
                 depth_mm = deepest * 1e3,
                 normal = ?contacts.normal,
-                "dropped a misfired contact with a fixed box"
+                "dropped a misfired contact with a box"
             );
             contacts.solver_contacts.clear();
         }
     }
 }
 
-fn is_fixed_box(collider: &Collider) -> bool {
-    collider.parent().is_none() && collider.shape().as_cuboid().is_some()
+/// A box of the scenery or of the hand; an object is a compound, never one.
+fn is_box(collider: &Collider) -> bool {
+    collider.shape().as_cuboid().is_some()
 }
 
-/// True when `depth` (m), read by the narrow phase between the fixed box `fixed` and part
-/// `subshape` of `other` (the whole shape when it is not a compound), is deeper than the
-/// box-axes bound allows.
-fn exceeds_box_axes_depth(fixed: &Collider, other: &Collider, subshape: u32, depth: f32) -> bool {
+/// True when `depth` (m), read by the narrow phase between the box `boxed` and part `subshape`
+/// of `other` (the whole shape when it is not a compound), is deeper than the box-axes bound
+/// allows.
+fn exceeds_box_axes_depth(boxed: &Collider, other: &Collider, subshape: u32, depth: f32) -> bool {
     let (pose, part) = match other.shape().as_compound() {
         Some(compound) => match compound.shapes().get(subshape as usize) {
             Some((part_pose, part)) => (*other.position() * *part_pose, part.as_ref()),
@@ -125,7 +131,7 @@ fn exceeds_box_axes_depth(fixed: &Collider, other: &Collider, subshape: u32, dep
         },
         None => (*other.position(), other.shape()),
     };
-    box_axes_depth(fixed, &pose, part).is_some_and(|bound| depth > bound + MISFIRE_MARGIN)
+    box_axes_depth(boxed, &pose, part).is_some_and(|bound| depth > bound + MISFIRE_MARGIN)
 }
 
 /// The least push along one of box `a`'s axes that takes `part` (at `pose`) out of it (m), or
@@ -223,8 +229,8 @@ mod tests {
         assert!(exceeds_box_axes_depth(&floor, &sunk, 0, 0.03));
         // A part index the compound lacks is left alone rather than guessed at.
         assert!(!exceeds_box_axes_depth(&floor, &body, 7, 0.05));
-        // Only a box without a body is the fixed scenery.
-        assert!(is_fixed_box(&floor));
-        assert!(!is_fixed_box(&body));
+        // The hook screens boxes, of the scenery or the hand; an object is a compound.
+        assert!(is_box(&floor));
+        assert!(!is_box(&body));
     }
 }

@@ -1,12 +1,14 @@
 //! How the workcell advances time: one step (split while an object falls fast), holding the
 //! arm, and settling. The solver's settings are set once, in [`super::Workcell::new`].
 
+use rapier3d::prelude::RigidBodyHandle;
+
 use super::penetration::DropMisfiredContacts;
 use super::{Workcell, PHYSICS_HZ};
 use crate::sim::kinematics::Joints;
 
 /// Consecutive still steps (0.25 s) that count as settled.
-const SETTLED_STEPS: u32 = 60;
+pub(super) const SETTLED_STEPS: u32 = 60;
 /// An object moving slower than this (m/s) and turning slower than [`STILL_ANGULAR_SPEED`]
 /// is still.
 const STILL_LINEAR_SPEED: f32 = 0.005;
@@ -59,12 +61,7 @@ impl Workcell {
             self.hold_arm();
             self.step();
             steps += 1;
-            let moving = self.objects.iter().any(|o| {
-                let b = &self.world.bodies[o.body];
-                !b.is_sleeping()
-                    && (b.linvel().length() > STILL_LINEAR_SPEED
-                        || b.angvel().length() > STILL_ANGULAR_SPEED)
-            });
+            let moving = self.objects.iter().any(|o| !self.is_still(o.body));
             calm = if moving { 0 } else { calm + 1 };
             // A rocking object is briefly still at each turn; a calm spell this long is rest.
             if calm >= SETTLED_STEPS {
@@ -72,6 +69,15 @@ impl Workcell {
             }
         }
         steps as f32 / PHYSICS_HZ
+    }
+
+    /// Whether a body is asleep, or moving no faster than the still speeds.
+    pub(super) fn is_still(&self, body: RigidBodyHandle) -> bool {
+        let b = &self.world.bodies[body];
+        let moving = !b.is_sleeping()
+            && (b.linvel().length() > STILL_LINEAR_SPEED
+                || b.angvel().length() > STILL_ANGULAR_SPEED);
+        !moving
     }
 
     /// Keeps the arm and palm where they are for the next step.

@@ -50,6 +50,20 @@ impl Camera {
         )
     }
 
+    /// The camera over bin 2: the bin-1 camera mirrored through the robot's base, 128 × 128
+    /// pixels, 80° vertical field of view, eye at (−0.5, 0, 0.70711) looking straight down at
+    /// (−0.5, 0, 0) with up = (1, 0, 0). The workcell reads from it where to place.
+    pub fn place_top_down() -> Self {
+        Self::look_at(
+            Vec3::new(-0.5, 0.0, TOP_DOWN_EYE_HEIGHT),
+            Vec3::new(-0.5, 0.0, 0.0),
+            Vec3::new(1.0, 0.0, 0.0),
+            80.0,
+            128,
+            128,
+        )
+    }
+
     /// A camera at `eye` looking at `target`, with `up` pointing towards the top of the image.
     ///
     /// Square pixels, principal point at the image centre, `near` = 0.01 m, `far` = 10 m

@@ -16,6 +16,7 @@ mod label;
 mod layers;
 mod libtorch;
 mod physics;
+mod place;
 mod report;
 mod train;
 mod video;

@@ -272,7 +272,19 @@ impl Evaluation<'_> {
             record.timing.wall = attempt_start.elapsed().as_secs_f64() + setup_seconds;
             record.timing.sim += setup_seconds;
             setup_seconds = 0.0;
-            let line = format!("{moved}/{total} objects moved");
+            let mut line = format!("{moved}/{total} objects moved");
+            // A success whose object did not stay in bin 2 is what a user would otherwise see
+            // as an object that vanished.
+            if let (Some(held), Some(placed)) = (&record.held, record.placed) {
+                let rests = match placed {
+                    ObjectLocation::Bin1 => Some("back in bin 1"),
+                    ObjectLocation::Lost => Some("outside both bins"),
+                    ObjectLocation::Bin2 => None,
+                };
+                if let Some(rests) = rests {
+                    line += &format!(" ({held} was carried but came to rest {rests})");
+                }
+            }
             self.bar.suspend(|| self.context.say(&line));
             self.bar.inc(1);
             attempts.push(record);
@@ -393,6 +405,7 @@ impl Evaluation<'_> {
             detail: outcome.detail,
             aimed_at,
             held: outcome.object,
+            placed: outcome.placed,
             moved: None,
             vis: vis_written,
             violations: cell.take_violations(),
