@@ -25,8 +25,8 @@ self=$(realpath "$0")
 cd "$(dirname "$self")/.."
 root=$(pwd)
 
-tables=(pipeline training pytorch latency workcell quality yardstick sweep collision verification
-  centring suppression variants labelling soak faults tests webpage video)
+tables=(pipeline training pytorch latency workcell quality yardstick sweep placing collision
+  verification centring suppression variants labelling soak faults tests webpage video)
 
 describe() {
   case $1 in
@@ -38,6 +38,7 @@ describe() {
     quality) echo "model, random and oracle on train, test and empty_bin, held-out seeds included" ;;
     yardstick) echo "the oracle with and without failure memory in empty_bin, against the model" ;;
     sweep) echo "scripts/grasp-sweep.sh oracle and random" ;;
+    placing) echo "objects lost after a carry in empty_bin, bundled and with MESH_OBJECTS=DIR (--objects-dir)" ;;
     collision) echo "--collision-check off, walls and full without verification" ;;
     verification) echo "--verify-rejected 0, --verify-floor 0.25 and --verify-top 0 against the defaults" ;;
     centring) echo "--centring without verification" ;;
@@ -179,6 +180,7 @@ eval_into() {
 spec_args() {
   case $1 in
     train) spec=(--task train --seeds 0) ;;
+    train13) spec=(--task train --seeds 1-3) ;;
     test) spec=(--task test --seeds "$TEST_SEEDS") ;;
     htest) spec=(--task test --seeds "$HELD_TEST") ;;
     e2) spec=(--task empty_bin --seeds 2 --n-past-action 8 --max-attempts "$MAX_ATTEMPTS") ;;
@@ -336,6 +338,19 @@ t_yardstick() {
   for spec in e enp8 enp25 he henp8; do ev oracle "$spec"; done
   ev model enp8
   ev model henp8
+}
+
+# MESH_OBJECTS=DIR: an objects dir (with split.json) holding mesh models, for the second column.
+t_placing() {
+  local policy
+  for policy in model oracle; do
+    ev "$policy" enp8
+    ev "$policy" train13
+    if [[ -n ${MESH_OBJECTS:-} ]]; then
+      ev "$policy" enp8 mesh --objects-dir "$(realpath "$MESH_OBJECTS")"
+      ev "$policy" train13 mesh --objects-dir "$(realpath "$MESH_OBJECTS")"
+    fi
+  done
 }
 
 t_sweep() {
@@ -774,6 +789,26 @@ def t_yardstick():
     print(f"Oracle np8 minus model np8, paired per seed: {paired(ev('oracle-enp8'), ev('model-enp8'))} ({a}), "
           f"{paired(ev('oracle-henp8'), ev('model-henp8'))} ({b}).")
     print()
+
+
+def after_carry(r):
+    """Per scene: objects lost, and those lost after a successful carry (placed outside bin 2)."""
+    if r is None or r.get("lost") is None:
+        return DASH
+    carried = [a for run in r["runs"] for a in run["attempts"] if a.get("success")]
+    outside = sum(1 for a in carried if a.get("placed") != "bin2")
+    return f"{r['lost']['mean']:.1f} lost, {outside / len(r['runs']):.1f} after a carry"
+
+
+def t_placing():
+    head("Objects that stay in bin 2",
+         "`graspmap eval --task empty_bin --seeds S --n-past-action 8 [--policy oracle] [--objects-dir MESH_OBJECTS]`.")
+    rows = []
+    for policy in ("model", "oracle"):
+        for tag, objects in (("", "bundled"), ("-mesh", "MESH_OBJECTS")):
+            e, t = ev(f"{policy}-enp8{tag}"), ev(f"{policy}-train13{tag}")
+            rows.append([policy, objects, moved(e, lost=False), after_carry(e), rate(t)])
+    md(["policy", "objects", f"empty_bin, {seeds(E['EMPTY_SEEDS'])}, np8: moved", "lost per scene", "train, seeds 1–3"], rows)
 
 
 def t_sweep():
