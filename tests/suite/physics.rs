@@ -120,9 +120,9 @@ fn oracle_lifts_the_clamp() {
 #[test]
 fn oracle_lifts_a_lying_mustard_bottle() {
     // On its broad face the body (99 mm) is wider than the jaw; what fits is the cap end.
-    // Cap grasps are marginal at some yaws (docs/history.md, the sweep of yaws 0–1.2 rad):
-    // since the misfired-contact check, 0.3 and 0.5 drop the bottle on the way to bin 2, while
-    // 0.6, 0.8 and 1.0 all place it; this one sits in the middle of that run.
+    // Cap grasps are marginal at some yaws (docs/history.md, the sweep of yaws 0–1.2 rad): with
+    // the faster carry, 0.3 and 0.5 dropped the bottle on the way to bin 2; at 1.2 rad/s and
+    // 1 rad/s² (docs/grasping.md) 0.3, 0.5, 0.6, 0.8 and 1.0 all place it.
     let mut cell = placed(
         "YcbMustardBottle",
         Pose::from_parts(
