@@ -2,6 +2,7 @@
 //! heights it sees, the lowest free spot for the held object, a release just above what lies
 //! there, and a wait until the object rests.
 
+use rapier3d::glamx::{Mat3, Vec2};
 use rapier3d::math::{Pose, Rotation, Vector};
 
 use super::guard::Guard;
@@ -167,13 +168,13 @@ impl Workcell {
                 .max(GRIPPER.max_opening / 2.0 + GRIPPER.pad_thickness),
             0.0,
         );
-        let axes = rapier3d::glamx::Mat3::from_quat(rotation);
+        let axes = Mat3::from_quat(rotation);
         let hand = (axes.x_axis.abs() * hand_local.x + axes.y_axis.abs() * hand_local.y).truncate();
 
         let tote = PLACE_TOTE;
-        let centre = rapier3d::glamx::Vec2::new(tote.center[0], tote.center[1]);
-        let inner = rapier3d::glamx::Vec2::new(tote.inner_half[0], tote.inner_half[1]);
-        let free = |middle: rapier3d::glamx::Vec2, half: rapier3d::glamx::Vec2| {
+        let centre = Vec2::new(tote.center[0], tote.center[1]);
+        let inner = Vec2::new(tote.inner_half[0], tote.inner_half[1]);
+        let free = |middle: Vec2, half: Vec2| {
             let reach = (middle - centre).abs() + half;
             reach.x <= inner.x - WALL_GAP && reach.y <= inner.y - WALL_GAP
         };
@@ -181,7 +182,7 @@ impl Workcell {
         let mut spots = Vec::new();
         for i in -steps(0)..=steps(0) {
             for j in -steps(1)..=steps(1) {
-                let spot = centre + rapier3d::glamx::Vec2::new(i as f32, j as f32) * SPOT_STEP;
+                let spot = centre + Vec2::new(i as f32, j as f32) * SPOT_STEP;
                 let object = spot + offset;
                 if !free(object, half) || !free(spot, hand) {
                     continue;
@@ -197,13 +198,13 @@ impl Workcell {
         let lowest = spots.iter().map(|s| s.1).fold(f32::INFINITY, f32::min);
         spots.retain(|s| s.1 <= lowest + LEVEL_TOLERANCE);
         spots.sort_by(|a, b| {
-            let key = |s: &(rapier3d::glamx::Vec2, f32)| ((s.0 - centre).length(), s.0.x, s.0.y);
+            let key = |s: &(Vec2, f32)| ((s.0 - centre).length(), s.0.x, s.0.y);
             key(a)
                 .partial_cmp(&key(b))
                 .unwrap_or(std::cmp::Ordering::Equal)
         });
         let ur5 = Ur5::new(to_isometry(&Pose::from_translation(ROBOT_BASE)));
-        let tool0_at = |spot: rapier3d::glamx::Vec2, z: f32| {
+        let tool0_at = |spot: Vec2, z: f32| {
             Pose::from_parts(
                 Vector::new(spot.x, spot.y, z + GRIPPER.tcp_offset),
                 rotation,

@@ -40,24 +40,23 @@ impl Camera {
     ///
     /// Image columns therefore run along world +y and rows along world +x.
     pub fn top_down() -> Self {
-        Self::look_at(
-            Vec3::new(0.5, 0.0, TOP_DOWN_EYE_HEIGHT),
-            Vec3::new(0.5, 0.0, 0.0),
-            Vec3::new(-1.0, 0.0, 0.0),
-            80.0,
-            128,
-            128,
-        )
+        Self::straight_down_over(0.5, -1.0)
     }
 
     /// The camera over bin 2: the bin-1 camera mirrored through the robot's base, 128 × 128
     /// pixels, 80° vertical field of view, eye at (−0.5, 0, 0.70711) looking straight down at
     /// (−0.5, 0, 0) with up = (1, 0, 0). The workcell reads from it where to place.
     pub fn place_top_down() -> Self {
+        Self::straight_down_over(-0.5, 1.0)
+    }
+
+    /// The workcell's camera model over world x = `x`: 128 × 128, 80°, looking straight down
+    /// from [`TOP_DOWN_EYE_HEIGHT`] with up along x by `up_x`.
+    fn straight_down_over(x: f32, up_x: f32) -> Self {
         Self::look_at(
-            Vec3::new(-0.5, 0.0, TOP_DOWN_EYE_HEIGHT),
-            Vec3::new(-0.5, 0.0, 0.0),
-            Vec3::new(1.0, 0.0, 0.0),
+            Vec3::new(x, 0.0, TOP_DOWN_EYE_HEIGHT),
+            Vec3::new(x, 0.0, 0.0),
+            Vec3::new(up_x, 0.0, 0.0),
             80.0,
             128,
             128,
