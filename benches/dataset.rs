@@ -24,12 +24,22 @@ fn main() {
     let mut checksum = 0.0;
     let start = Instant::now();
     for _ in 0..n {
-        checksum += training_sample(item, Some((&config, &mut rng))).target[0];
+        checksum += training_sample(
+            item,
+            graspmap::data::dataset::TrialWeighting::default(),
+            Some((&config, &mut rng)),
+        )
+        .target[0];
     }
     let augmented = start.elapsed() / n;
     let start = Instant::now();
     for _ in 0..n {
-        checksum += training_sample(item, None).target[0];
+        checksum += training_sample(
+            item,
+            graspmap::data::dataset::TrialWeighting::default(),
+            None,
+        )
+        .target[0];
     }
     let plain = start.elapsed() / n;
     println!(

@@ -10,8 +10,10 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::commands;
 use crate::commands::bench::{BenchConfig, PeerPython};
+use crate::commands::collect::CollectPolicy;
 use crate::commands::scene::SceneConfig;
 use crate::data::input::InputKind;
+use crate::data::trials::Shard;
 use crate::model::config::TrainConfig;
 use crate::model::unet::Precision;
 use crate::policy::collision::CollisionCheck;
@@ -76,6 +78,14 @@ pub(crate) enum Command {
     /// Let a policy pick objects in simulation and report how it did.
     #[command(allow_negative_numbers = true)]
     Eval(EvalArgs),
+    /// Try grasps in clutter on the training objects and store every attempt (trials).
+    #[command(allow_negative_numbers = true)]
+    Collect(CollectArgs),
+    /// Combine the shard stores of one `collect --shard I/N` run into one trial store.
+    Merge(MergeArgs),
+    /// The self-supervised loop: collect trials with the current model, retrain, repeat.
+    #[command(allow_negative_numbers = true)]
+    Improve(ImproveArgs),
     /// Run the trained model on a 128 × 128 RGB image and print its best grasp.
     #[command(allow_negative_numbers = true)]
     Predict(PredictArgs),
@@ -145,6 +155,44 @@ pub(crate) struct TrainArgs {
     /// What the network sees; rgbd needs DATA/labels/<Object>_<k>_depth.png beside every label.
     #[arg(long, value_parser = named::<InputKind>(), default_value = "rgb")]
     pub(crate) input: InputKind,
+    /// Train on PX × PX crops around each supervised pixel (a multiple of 4, at least 32; 0 =
+    /// whole images). Inference and validation always see whole images.
+    #[arg(long, value_name = "PX", default_value_t = TrainConfig::default().crop, value_parser = parse_crop)]
+    pub(crate) crop: u32,
+    /// Also train on the trials of this store (as `graspmap collect` writes it); repeat for
+    /// several. Each trial supervises only its executed pixel and rotation.
+    #[arg(long, value_name = "DIR")]
+    pub(crate) trials: Vec<PathBuf>,
+    /// Leave the labels out: train on --trials alone.
+    #[arg(long, requires = "trials")]
+    pub(crate) no_labels: bool,
+    /// A trial's total loss weight, against a label's 1 spread over its pixels (above 0, at
+    /// most 1).
+    #[arg(long, value_name = "W", default_value_t = TrainConfig::default().trial_weight, value_parser = positive_up_to::<f32>(1.0))]
+    pub(crate) trial_weight: f32,
+    /// σ in pixels of the Gaussian window a trial weights around its pixel (0 = the pixel
+    /// alone; at most 8).
+    #[arg(long, value_name = "PX", default_value_t = 0.0, value_parser = non_negative_up_to(8.0))]
+    pub(crate) trial_sigma: f32,
+    /// Start from this checkpoint's weights instead of fresh ones (fine-tuning).
+    #[arg(long, value_name = "PATH", conflicts_with = "resume")]
+    pub(crate) start_from: Option<PathBuf>,
+    /// Where the model goes [default: DATA/affordance].
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out_dir: Option<PathBuf>,
+}
+
+/// `--crop` values: 0, or a multiple of 4 from 32 to 128.
+fn parse_crop(text: &str) -> Result<u32, String> {
+    let crop: u32 = text.trim().parse().map_err(|_| {
+        format!("'{text}' is not a whole number of pixels (e.g. 64, or 0 for whole images)")
+    })?;
+    if crop != 0 && (!crop.is_multiple_of(4) || !(32..=128).contains(&crop)) {
+        return Err(format!(
+            "{crop} px: a crop is a multiple of 4 from 32 to 128, or 0 for whole images"
+        ));
+    }
+    Ok(crop)
 }
 
 /// `--precision` values.
@@ -251,6 +299,119 @@ pub(crate) struct EvalArgs {
     /// report violations per attempt; slower, for scripts/soak.sh.
     #[arg(long, hide = true)]
     pub(crate) check_invariants: bool,
+}
+
+/// `graspmap collect`.
+#[derive(Debug, Args)]
+pub(crate) struct CollectArgs {
+    /// The trial store [default: DATA/trials].
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+    /// Seed of every scene's drop and of the policies' draws.
+    #[arg(long, default_value_t = 0)]
+    pub(crate) seed: u64,
+    /// Scenes of the whole run (all shards together).
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u64).range(1..))]
+    pub(crate) scenes: u64,
+    #[command(flatten)]
+    pub(crate) trials: TrialArgs,
+    /// Collect only part of the scenes: shard I of N holds scenes s with s mod N = I − 1.
+    #[arg(long, value_name = "I/N", value_parser = parse_shard)]
+    pub(crate) shard: Option<Shard>,
+    /// Delete the store's scenes and start over.
+    #[arg(long, conflicts_with = "check")]
+    pub(crate) force: bool,
+    /// Only validate the store; exit 2 if anything is wrong.
+    #[arg(long)]
+    pub(crate) check: bool,
+}
+
+/// How trials are collected: shared by `collect` and `improve`.
+#[derive(Debug, Args, Clone)]
+pub(crate) struct TrialArgs {
+    /// Training objects dropped per scene (at most the split's training objects).
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) clutter: u32,
+    /// Most attempts per scene (a scene also ends when bin 1 is empty).
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=99))]
+    pub(crate) max_attempts: u32,
+    /// Who chooses the grasps.
+    #[arg(long, value_parser = named::<CollectPolicy>(), default_value = "mix")]
+    pub(crate) policy: CollectPolicy,
+    /// Chance that a model attempt samples its action from the maps instead (0 to 1).
+    #[arg(long, value_name = "P", default_value_t = 0.3, value_parser = fraction)]
+    pub(crate) explore: f32,
+    /// Exploration's temperature: actions are drawn ∝ score^(1/T) (above 0, at most 10).
+    #[arg(long, value_name = "T", default_value_t = 1.0, value_parser = positive_up_to::<f32>(10.0))]
+    pub(crate) temperature: f32,
+    /// mix: chance that the oracle chooses an attempt (0 to 1).
+    #[arg(long, value_name = "P", default_value_t = 0.5, value_parser = fraction)]
+    pub(crate) oracle_share: f32,
+    /// Failure suppression within a scene, as eval's --n-past-action.
+    #[arg(
+        long = "n-past-action",
+        visible_alias = "n_past_action",
+        value_name = "N",
+        default_value_t = 8
+    )]
+    pub(crate) n_past_action: usize,
+    /// Model weights for model and mix [default: DATA/affordance/best.safetensors].
+    #[arg(long, value_name = "PATH")]
+    pub(crate) checkpoint: Option<PathBuf>,
+    /// Arithmetic of the network.
+    #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
+    pub(crate) precision: PrecisionChoice,
+}
+
+/// `graspmap merge`.
+#[derive(Debug, Args)]
+pub(crate) struct MergeArgs {
+    /// The shard stores, as `collect --shard I/N` wrote them.
+    #[arg(required = true, value_name = "SHARD_DIR")]
+    pub(crate) inputs: Vec<PathBuf>,
+    /// The merged store: a new (or empty) folder.
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: PathBuf,
+    /// Merge the shards that are there when some are missing; the store says which.
+    #[arg(long)]
+    pub(crate) allow_partial: bool,
+}
+
+/// `graspmap improve`.
+#[derive(Debug, Args)]
+pub(crate) struct ImproveArgs {
+    /// Rounds of collect-then-retrain.
+    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=20))]
+    pub(crate) rounds: u32,
+    /// Scenes collected per round.
+    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u64).range(1..))]
+    pub(crate) scenes: u64,
+    /// Epochs of retraining per round, starting from the round's model.
+    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
+    pub(crate) epochs: u32,
+    /// Seed of the rounds' collection and training.
+    #[arg(long, default_value_t = 0)]
+    pub(crate) seed: u64,
+    /// After each round, evaluate its model on empty_bin with these seeds (with
+    /// --n-past-action 8), and put the figures in the round's summary.
+    #[arg(long, value_name = "LIST", value_parser = parse_seed_list)]
+    pub(crate) eval_seeds: Option<SeedList>,
+    #[command(flatten)]
+    pub(crate) trials: TrialArgs,
+    /// Train on PX × PX crops (as train --crop).
+    #[arg(long, value_name = "PX", default_value_t = TrainConfig::default().crop, value_parser = parse_crop)]
+    pub(crate) crop: u32,
+    /// A trial's loss weight (as train --trial-weight).
+    #[arg(long, value_name = "W", default_value_t = TrainConfig::default().trial_weight, value_parser = positive_up_to::<f32>(1.0))]
+    pub(crate) trial_weight: f32,
+    /// Where the rounds go [default: DATA/improve].
+    #[arg(long, value_name = "DIR")]
+    pub(crate) out: Option<PathBuf>,
+}
+
+/// `--shard` values.
+fn parse_shard(text: &str) -> Result<Shard, String> {
+    Shard::parse(text)
 }
 
 /// `graspmap predict`.
@@ -454,7 +615,11 @@ pub fn run() -> anyhow::Result<()> {
     if serves_report
         || matches!(
             cli.command,
-            Command::Label(_) | Command::Train(_) | Command::Eval(_)
+            Command::Label(_)
+                | Command::Train(_)
+                | Command::Eval(_)
+                | Command::Collect(_)
+                | Command::Improve(_)
         )
     {
         crate::interrupt::install().context("installing the Ctrl-C handler")?;
@@ -477,11 +642,26 @@ pub fn run() -> anyhow::Result<()> {
         ),
         Command::Grasp(args) => commands::grasp::run(&context, args.config()?),
         Command::Label(args) => commands::label::run(&context, args.config(&data)),
-        Command::Train(args) => commands::train::run(&context, args.options()),
+        Command::Train(args) => commands::train::run(&context, args.options(&data)),
         Command::Eval(args) => {
             let config = args.config(&data)?;
             commands::eval::run(&context, config)
         }
+        Command::Collect(args) => match args.check {
+            true => {
+                commands::collect::check(&context, &args.out.unwrap_or_else(|| data.join("trials")))
+            }
+            false => commands::collect::run(&context, args.config(&data)?),
+        },
+        Command::Merge(args) => commands::merge::run(
+            &context,
+            commands::merge::MergeConfig {
+                inputs: args.inputs,
+                out: args.out,
+                allow_partial: args.allow_partial,
+            },
+        ),
+        Command::Improve(args) => commands::improve::run(&context, args.config(&data)?),
         Command::Predict(args) => commands::predict::run(&context, args.config(&data)),
         Command::Report(args) => commands::report::run(&context, args.config(&data)?),
         Command::Bench(BenchCommand::Train(args)) => commands::bench::run(
@@ -509,6 +689,9 @@ impl Command {
             Command::Label(_) => "label",
             Command::Train(_) => "train",
             Command::Eval(_) => "eval",
+            Command::Collect(_) => "collect",
+            Command::Merge(_) => "merge",
+            Command::Improve(_) => "improve",
             Command::Predict(_) => "predict",
             Command::Report(_) => "report",
             Command::Bench(_) => "bench",
@@ -519,10 +702,14 @@ impl Command {
     fn reads_objects_and_split(&self) -> (bool, bool) {
         match self {
             Command::Scene(_) | Command::Grasp(_) => (true, false),
-            Command::Label(_) | Command::Eval(_) => (true, true),
-            Command::Train(_) | Command::Predict(_) | Command::Report(_) | Command::Bench(_) => {
-                (false, false)
+            Command::Label(_) | Command::Eval(_) | Command::Collect(_) | Command::Improve(_) => {
+                (true, true)
             }
+            Command::Train(_)
+            | Command::Merge(_)
+            | Command::Predict(_)
+            | Command::Report(_)
+            | Command::Bench(_) => (false, false),
         }
     }
 }
@@ -533,12 +720,12 @@ fn refuse_unused_globals(global: &GlobalArgs, command: &Command) -> anyhow::Resu
     let name = command.name();
     if global.objects_dir.is_some() && !objects {
         bail!(
-            "--objects-dir is not used by `graspmap {name}` (scene, grasp, label and eval load objects); leave it out"
+            "--objects-dir is not used by `graspmap {name}` (scene, grasp, label, eval, collect and improve load objects); leave it out"
         );
     }
     if global.split.is_some() && !split {
         bail!(
-            "--split is not used by `graspmap {name}` (label and eval read the split); leave it out"
+            "--split is not used by `graspmap {name}` (label, eval, collect and improve read the split); leave it out"
         );
     }
     Ok(())

@@ -5,15 +5,21 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _};
 
-use super::{EvalArgs, GlobalArgs, GraspArgs, LabelArgs, PredictArgs, ReportArgs, TrainArgs};
+use super::{
+    CollectArgs, EvalArgs, GlobalArgs, GraspArgs, ImproveArgs, LabelArgs, PredictArgs, ReportArgs,
+    TrainArgs, TrialArgs,
+};
 use crate::assets::objects::{ObjectLibrary, SplitFile};
+use crate::commands::collect::CollectConfig;
 use crate::commands::eval::EvalConfig;
 use crate::commands::grasp::{GraspChoice, GraspConfig};
+use crate::commands::improve::ImproveConfig;
 use crate::commands::label::{ClickNoise, ClickSource, LabelConfig};
 use crate::commands::predict::PredictConfig;
 use crate::commands::report::ReportConfig;
 use crate::commands::train::TrainOptions;
 use crate::commands::Context;
+use crate::data::trials::Shard;
 use crate::grasp::PixelGrasp;
 use crate::model::config::TrainConfig;
 use crate::policy::model::ModelPolicyConfig;
@@ -102,6 +108,72 @@ impl EvalArgs {
     }
 }
 
+impl TrialArgs {
+    /// The collection settings of these flags; the store, seed, scenes and shard come from the
+    /// command.
+    fn collect_config(self, data: &Path, out: PathBuf, seed: u64, scenes: u64) -> CollectConfig {
+        CollectConfig {
+            out,
+            seed,
+            scenes,
+            clutter: self.clutter as usize,
+            max_attempts: self.max_attempts,
+            policy: self.policy,
+            explore: f64::from(self.explore),
+            temperature: self.temperature,
+            oracle_share: f64::from(self.oracle_share),
+            checkpoint: checkpoint_path(data, self.checkpoint),
+            precision: self.precision.resolve(),
+            model: ModelPolicyConfig::default(),
+            suppression: SuppressionConfig {
+                remember: self.n_past_action,
+                ..SuppressionConfig::default()
+            },
+            shard: Shard::WHOLE,
+            force: false,
+        }
+    }
+}
+
+impl CollectArgs {
+    pub(super) fn config(self, data: &Path) -> anyhow::Result<CollectConfig> {
+        let out = self.out.unwrap_or_else(|| data.join("trials"));
+        let mut config = self
+            .trials
+            .collect_config(data, out, self.seed, self.scenes);
+        config.shard = self.shard.unwrap_or(Shard::WHOLE);
+        config.force = self.force;
+        Ok(config)
+    }
+}
+
+impl ImproveArgs {
+    pub(super) fn config(self, data: &Path) -> anyhow::Result<ImproveConfig> {
+        let out = self.out.unwrap_or_else(|| data.join("improve"));
+        let start = checkpoint_path(data, self.trials.checkpoint.clone());
+        let precision = self.trials.precision.resolve();
+        let collect = self
+            .trials
+            .collect_config(data, out.join("trials"), self.seed, self.scenes);
+        Ok(ImproveConfig {
+            out,
+            rounds: self.rounds,
+            start,
+            labels: data.join("labels"),
+            collect,
+            train: TrainConfig {
+                epochs: self.epochs,
+                seed: self.seed,
+                precision,
+                crop: self.crop,
+                trial_weight: self.trial_weight,
+                ..TrainConfig::default()
+            },
+            eval_seeds: self.eval_seeds.map(|s| s.0),
+        })
+    }
+}
+
 impl PredictArgs {
     pub(super) fn config(self, data: &Path) -> PredictConfig {
         let out = self.out.unwrap_or_else(|| {
@@ -186,7 +258,7 @@ impl LabelArgs {
 }
 
 impl TrainArgs {
-    pub(super) fn options(self) -> TrainOptions {
+    pub(super) fn options(self, data: &Path) -> TrainOptions {
         TrainOptions {
             config: TrainConfig {
                 epochs: self.epochs,
@@ -195,10 +267,17 @@ impl TrainArgs {
                 seed: self.seed,
                 precision: self.precision.resolve(),
                 input: self.input,
+                crop: self.crop,
+                trial_weight: self.trial_weight,
+                trial_sigma_px: self.trial_sigma,
                 ..TrainConfig::default()
             },
             resume: self.resume,
             force: self.force,
+            out_dir: self.out_dir.unwrap_or_else(|| data.join("affordance")),
+            labels: (!self.no_labels).then(|| data.join("labels")),
+            trials: self.trials,
+            start_from: self.start_from,
         }
     }
 }

@@ -1,9 +1,12 @@
 //! Commands: each orchestrates the core, the objects and the simulator, and owns all printing.
 
 pub(crate) mod bench;
+pub(crate) mod collect;
 pub(crate) mod eval;
 pub(crate) mod grasp;
+pub(crate) mod improve;
 pub(crate) mod label;
+pub(crate) mod merge;
 pub(crate) mod predict;
 pub(crate) mod report;
 pub(crate) mod scene;

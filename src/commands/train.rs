@@ -1,7 +1,7 @@
 //! `graspmap train`: fit the MiniUNet to the labels, with best/last checkpoints, per-epoch visualisations and exact resume.
 
 use std::ops::ControlFlow;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::{bail, Context as _};
@@ -10,14 +10,19 @@ use tch::nn;
 use super::Context;
 use crate::data::atomic::{save_image_atomic, write_atomic};
 use crate::data::augment::AugmentConfig;
-use crate::data::dataset::{load_dataset, split_train_validation, training_sample, LabelledImage};
+use crate::data::dataset::{
+    load_dataset, split_train_validation, training_sample, LabelledImage, Supervision,
+    TrialWeighting,
+};
 use crate::data::labels::LabelStore;
 use crate::data::lock::{LockError, StoreLock};
 use crate::data::output::check_output_dir;
+use crate::data::trials::TrialStore;
 use crate::grasp::IMAGE_SIZE;
 use crate::interrupt::{self, Interrupted};
 use crate::model::checkpoint::{
-    load_weights, read_checkpoint, save_checkpoint, CheckpointMeta, EpochRecord,
+    file_sha256, load_weights, read_checkpoint, save_checkpoint, CheckpointMeta, EpochRecord,
+    StartWeights, TrainingData, TrialSource,
 };
 use crate::model::config::{Plateau, TrainConfig};
 use crate::model::train::{predict_map, train_epoch, validate, Adam, Subset};
@@ -35,11 +40,20 @@ pub(crate) struct TrainOptions {
     pub(crate) resume: bool,
     /// Train anew over an existing model, keeping its best as best.prev.*.
     pub(crate) force: bool,
+    /// Where the model goes (DATA/affordance by default).
+    pub(crate) out_dir: PathBuf,
+    /// The labels folder, or `None` to train on trials alone.
+    pub(crate) labels: Option<PathBuf>,
+    /// Trial stores to train on as well (`--trials`).
+    pub(crate) trials: Vec<PathBuf>,
+    /// A checkpoint whose weights the run starts from, instead of fresh ones.
+    pub(crate) start_from: Option<PathBuf>,
 }
 
 #[derive(Debug, serde::Serialize)]
 struct TrainResults {
     labels: usize,
+    trials: usize,
     train_samples: usize,
     val_samples: usize,
     epochs_run: u32,
@@ -64,23 +78,23 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
     let config = options.config.clone();
     crate::model::use_threads(context.threads);
     tch::manual_seed(config.seed as i64);
-    let store = LabelStore::new(context.data.join("labels"));
-    let images = {
-        let _labels = labels_not_being_written(store.dir())?;
-        load_dataset(&store, config.input)?
-    };
+    let (images, trained_on) = load_training_data(&options)?;
+    let n_labels = trained_on.as_ref().map_or(images.len(), |t| t.labels);
     if images.len() < 2 {
+        let what = match &options.labels {
+            Some(dir) => format!("{} has {}", dir.display(), counted(n_labels, "label")),
+            None => "the trial stores hold".to_owned(),
+        };
         bail!(
-            "{} has {}; training needs at least 2 (run graspmap label first)",
-            store.dir().display(),
-            counted(images.len(), "label")
+            "{what} and {}; training needs at least 2 (run graspmap label or graspmap collect first)",
+            counted(images.len() - n_labels, "trial")
         );
     }
-    let out_dir = context.data.join("affordance");
+    let out_dir = options.out_dir.clone();
     check_output_dir(&out_dir.join("training_vis"), "the model folder")?;
     let _writer = StoreLock::acquire(&out_dir, "train")?;
-    let resume = resume_or_refuse(context, &options, &out_dir, images.len())?;
-    let mut run = start(&config, &out_dir, images.len(), resume)?;
+    let resume = resume_or_refuse(context, &options, &out_dir, images.len(), &trained_on)?;
+    let mut run = start(&options, &out_dir, images.len(), resume, trained_on)?;
     if run.meta.epoch >= config.epochs {
         context.say(&format!(
             "already trained {} (--epochs {}); nothing to do",
@@ -124,7 +138,8 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
     let meta = &run.meta;
     let last = meta.history.last();
     let results = TrainResults {
-        labels: images.len(),
+        labels: n_labels,
+        trials: images.len() - n_labels,
         train_samples: meta.train_indices.len(),
         val_samples: meta.val_indices.len(),
         epochs_run: meta.epoch,
@@ -136,9 +151,13 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
         checkpoint: out_dir.join("best.safetensors").display().to_string(),
     };
     context.say(&format!(
-        "trained {} on {} ({} train / {} validation): best validation loss {:.5} at epoch {} -> {} ({:.1} s)",
+        "trained {} on {}{} ({} train / {} validation): best validation loss {:.5} at epoch {} -> {} ({:.1} s)",
         counted(results.epochs_run as usize, "epoch"),
         counted(results.labels, "label"),
+        match results.trials {
+            0 => String::new(),
+            n => format!(" and {}", counted(n, "trial")),
+        },
         results.train_samples,
         results.val_samples,
         results.best_val_loss,
@@ -153,10 +172,78 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
             "augment": augment,
             "resume": resume,
             "force": options.force,
+            "out_dir": options.out_dir,
+            "labels": options.labels,
+            "trials": options.trials,
+            "start_from": options.start_from,
         });
         write_report(json, "train", config.seed, &resolved, &results)?;
     }
     Ok(())
+}
+
+/// The labels (unless left out) and then every trial store's trials, as training items, with
+/// the record of them a checkpoint keeps (`None` for labels alone from fresh weights).
+fn load_training_data(
+    options: &TrainOptions,
+) -> anyhow::Result<(Vec<LabelledImage>, Option<TrainingData>)> {
+    let input = options.config.input;
+    let mut images = match &options.labels {
+        Some(dir) => {
+            let store = LabelStore::new(dir);
+            let _labels = labels_not_being_written(store.dir())?;
+            if options.trials.is_empty() || store.labels_path().exists() {
+                load_dataset(&store, input)?
+            } else {
+                Vec::new()
+            }
+        }
+        None => Vec::new(),
+    };
+    let labels = images.len();
+    let mut sources = Vec::new();
+    for dir in &options.trials {
+        let store = TrialStore::new(dir);
+        let _collecting = match StoreLock::acquire(dir, "collect") {
+            Ok(lock) => Some(lock),
+            Err(held @ LockError::Held { .. }) => {
+                return Err(anyhow::Error::new(held)
+                    .context("training needs the finished trials; wait for the collection to end"))
+            }
+            Err(LockError::Io { .. }) => None,
+        };
+        let trials = store.load_all(input)?;
+        let scenes: std::collections::BTreeSet<u64> = trials.iter().map(|t| t.scene).collect();
+        sources.push(TrialSource {
+            dir: dir.clone(),
+            scenes: scenes.len(),
+            trials: trials.len(),
+            successes: trials.iter().filter(|t| t.trial.success).count(),
+        });
+        images.extend(trials.into_iter().enumerate().map(|(k, t)| LabelledImage {
+            object: t.trial.held.or(t.trial.aimed_at).unwrap_or_default(),
+            k: k + 1,
+            image: t.image,
+            height: t.height,
+            grasp: t.trial.grasp,
+            supervision: Supervision::Trial {
+                success: t.trial.success,
+            },
+        }));
+    }
+    let start = match &options.start_from {
+        Some(path) => Some(StartWeights {
+            path: path.clone(),
+            sha256: file_sha256(path)?,
+        }),
+        None => None,
+    };
+    let trained_on = (!sources.is_empty() || start.is_some()).then_some(TrainingData {
+        labels,
+        trials: sources,
+        start,
+    });
+    Ok((images, trained_on))
 }
 
 /// Holds the labels' lock while the dataset is read, so that training never starts on a
@@ -183,6 +270,7 @@ fn resume_or_refuse(
     options: &TrainOptions,
     out_dir: &Path,
     n_images: usize,
+    trained_on: &Option<TrainingData>,
 ) -> anyhow::Result<bool> {
     let best = out_dir.join("best.safetensors");
     let last = out_dir.join("last.safetensors");
@@ -201,7 +289,7 @@ fn resume_or_refuse(
         return Ok(false);
     }
     let why = match read_checkpoint(out_dir, "last") {
-        Ok((_, meta)) => match resumable(&meta, &options.config, n_images) {
+        Ok((_, meta)) => match resumable(&meta, &options.config, n_images, trained_on) {
             Ok(()) => {
                 context.say(&format!(
                     "resuming {} at epoch {} (same settings and labels; --force trains anew)",
@@ -222,21 +310,50 @@ fn resume_or_refuse(
 }
 
 /// Why the run a checkpoint holds cannot continue with `config` on `n_images` labels.
-fn resumable(meta: &CheckpointMeta, config: &TrainConfig, n_images: usize) -> Result<(), String> {
+fn resumable(
+    meta: &CheckpointMeta,
+    config: &TrainConfig,
+    n_images: usize,
+    trained_on: &Option<TrainingData>,
+) -> Result<(), String> {
     let saved = &meta.config;
     if saved.seed != config.seed
         || saved.batch_size != config.batch_size
         || saved.lr != config.lr
         || saved.precision != config.precision
         || saved.input != config.input
+        || saved.crop != config.crop
+        || saved.trial_weight != config.trial_weight
+        || saved.trial_sigma_px != config.trial_sigma_px
     {
         return Err(format!(
-            "was trained with --seed {} --batch-size {} --lr {} --precision {} --input {}",
+            "was trained with --seed {} --batch-size {} --lr {} --precision {} --input {} --crop {} --trial-weight {} --trial-sigma {}",
             saved.seed,
             saved.batch_size,
             saved.lr,
             saved.precision.name(),
-            saved.input
+            saved.input,
+            saved.crop,
+            saved.trial_weight,
+            saved.trial_sigma_px
+        ));
+    }
+    if &meta.trained_on != trained_on {
+        let describe = |t: &Option<TrainingData>| match t {
+            None => "the labels alone from fresh weights".to_owned(),
+            Some(t) => format!(
+                "{} and {} from {}",
+                counted(t.labels, "label"),
+                counted(t.trials.iter().map(|s| s.trials).sum::<usize>(), "trial"),
+                t.start
+                    .as_ref()
+                    .map_or("fresh weights".to_owned(), |s| s.path.display().to_string())
+            ),
+        };
+        return Err(format!(
+            "was trained on {}, and this run has {}",
+            describe(&meta.trained_on),
+            describe(trained_on)
         ));
     }
     let known = meta.train_indices.len() + meta.val_indices.len();
@@ -273,15 +390,24 @@ fn keep_previous_best(out_dir: &Path) -> anyhow::Result<()> {
 
 /// A fresh network with its 90/10 split, or the run that last.* holds.
 fn start(
-    config: &TrainConfig,
+    options: &TrainOptions,
     out_dir: &Path,
     n_images: usize,
     resume: bool,
+    trained_on: Option<TrainingData>,
 ) -> anyhow::Result<Run> {
+    let config = &options.config;
     let mut vs = nn::VarStore::new(tch::Device::Cpu);
     let net = MiniUNet::with_input(&vs.root(), config.input);
     let mut adam = Adam::new(&vs, config.lr);
     if !resume {
+        if let Some(path) = &options.start_from {
+            let decoded = crate::model::checkpoint::read(
+                path,
+                "give another --start-from, or train from fresh weights without it",
+            )?;
+            load_weights(&mut vs, &decoded.tensors, path)?;
+        }
         let (train_indices, val_indices) = split_train_validation(n_images, config.seed);
         let meta = CheckpointMeta {
             schema: CheckpointMeta::SCHEMA.to_owned(),
@@ -295,6 +421,7 @@ fn start(
             adam_steps: 0,
             train_indices,
             val_indices,
+            trained_on,
         };
         return Ok(Run {
             vs,
@@ -304,7 +431,7 @@ fn start(
         });
     }
     let (tensors, mut meta) = read_checkpoint(out_dir, "last")?;
-    if let Err(why) = resumable(&meta, config, n_images) {
+    if let Err(why) = resumable(&meta, config, n_images, &trained_on) {
         bail!(
             "{} {why}; resume with the same settings and labels, or train anew with --force",
             out_dir.join("last.json").display()
@@ -489,7 +616,7 @@ fn save_training_vis(
     epoch: u32,
     precision: Precision,
 ) -> anyhow::Result<()> {
-    let sample = training_sample(item, None);
+    let sample = training_sample(item, TrialWeighting::default(), None);
     let prediction = predict_map(net, &sample, precision);
     let size = IMAGE_SIZE;
     let mut image = image::RgbImage::new(size * 3, size);

@@ -22,13 +22,56 @@ pub(crate) const TARGET_SIGMA_PX: f32 = 1.0;
 /// image before it falls back to the unaugmented sample.
 pub(crate) const MAX_AUGMENT_TRIES: usize = 10;
 
+/// Side of a training crop's margin that keeps the supervised pixel this far from the crop's
+/// edge: beyond the network's reach of 14 px (the crop test in model/train.rs), so the loss
+/// there sees what the whole image would give it.
+pub(crate) const CROP_MARGIN_PX: u32 = 16;
+/// Crops start on multiples of this, the network's pooling stride (2 × 2), so a crop's pooling
+/// grid is the whole image's.
+pub(crate) const CROP_ALIGN_PX: u32 = 4;
+
+/// What supervises an image: a hand-made label or a trial's outcome.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Supervision {
+    /// A label: a dense Gaussian target at the grasp centre, every pixel weighted.
+    Label,
+    /// A trial: 1 (success) or 0 (failure) at the executed pixel of the executed rotation, and
+    /// no weight anywhere else.
+    Trial {
+        /// Whether the grasp held.
+        success: bool,
+    },
+}
+
+/// How trial samples are weighted against labels (docs/learning.md, "Trials").
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TrialWeighting {
+    /// A trial's total weight; a label's is 1, spread evenly over its pixels.
+    pub(crate) weight: f32,
+    /// 0: the executed pixel alone; otherwise a Gaussian window of this σ (out to 2σ) around
+    /// it, its weights summing to `weight`.
+    pub(crate) sigma_px: f32,
+}
+
+impl Default for TrialWeighting {
+    fn default() -> Self {
+        Self {
+            weight: 0.01,
+            sigma_px: 0.0,
+        }
+    }
+}
+
 /// One network example, already rotated into its angle bin.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Sample {
     /// Rotated input, C × H × W (CHW): RGB in [0, 1], then for rgbd the height plane in [0, 1].
     pub(crate) input: Vec<f32>,
-    /// H × W Gaussian (σ = 1 px, peak 1) at the pixel holding the rotated grasp centre.
+    /// H × W: for a label, a Gaussian (σ = 1 px, peak 1) at the pixel holding the rotated grasp
+    /// centre; for a trial, its outcome where it has weight.
     pub target: Vec<f32>,
+    /// H × W per-pixel loss weights of a trial; `None` for a label (every pixel alike).
+    pub(crate) weight: Option<Vec<f32>>,
     /// Angle bin of the grasp; the image was rotated by −bin · 22.5°.
     pub(crate) bin: usize,
     /// Rotated grasp centre in continuous image coordinates (may lie outside the image).
@@ -70,6 +113,7 @@ pub(crate) fn make_sample(image: &NetInput, grasp_fingers: [[f32; 2]; 2]) -> Sam
     let mut sample = Sample {
         input,
         target: vec![0.0; plane],
+        weight: None,
         bin,
         center,
     };
@@ -84,6 +128,94 @@ pub(crate) fn make_sample(image: &NetInput, grasp_fingers: [[f32; 2]; 2]) -> Sam
         }
     }
     sample
+}
+
+/// The sample of a trial: the same rotation to the executed grasp's bin as a label's, then the
+/// outcome as the target where the weighting puts weight, and nothing elsewhere. A centre that
+/// the rotation carries out of the image gives an all-zero weight.
+pub(crate) fn make_trial_sample(
+    image: &NetInput,
+    grasp_fingers: [[f32; 2]; 2],
+    success: bool,
+    weighting: TrialWeighting,
+) -> Sample {
+    let mut sample = make_sample(image, grasp_fingers);
+    let w = image.rgb.width();
+    let plane = sample.target.len();
+    let outcome = if success { 1.0 } else { 0.0 };
+    sample.target = vec![0.0; plane];
+    let mut weight = vec![0.0; plane];
+    if let Some((pu, pv)) = sample.center_pixel(w) {
+        let sigma = weighting.sigma_px.max(0.0);
+        let reach = (2.0 * sigma).floor() as i64;
+        let mut window = Vec::new();
+        for dv in -reach..=reach {
+            for du in -reach..=reach {
+                let (u, v) = (i64::from(pu) + du, i64::from(pv) + dv);
+                let d2 = (du * du + dv * dv) as f32;
+                if !(0..i64::from(w)).contains(&u)
+                    || !(0..i64::from(w)).contains(&v)
+                    || d2 > 4.0 * sigma * sigma
+                {
+                    continue;
+                }
+                let g = if sigma > 0.0 {
+                    (-d2 / (2.0 * sigma * sigma)).exp()
+                } else {
+                    1.0
+                };
+                window.push(((v * i64::from(w) + u) as usize, g));
+            }
+        }
+        let total: f32 = window.iter().map(|(_, g)| g).sum();
+        for (i, g) in window {
+            weight[i] = weighting.weight * g / total;
+            sample.target[i] = outcome;
+        }
+    }
+    sample.weight = Some(weight);
+    sample
+}
+
+/// A `crop` × `crop` window of a sample that holds its supervised pixel at least
+/// [`CROP_MARGIN_PX`] from the window's edge (or at the image's own edge), placed at random, on
+/// the pooling grid. Training on it costs a quarter of the whole image at 64 px; the network
+/// is fully convolutional, so inference still runs on the whole image.
+pub(crate) fn crop_sample(sample: &Sample, crop: u32, rng: &mut impl rand::Rng) -> Sample {
+    let size = (sample.target.len() as f64).sqrt() as u32;
+    if crop == 0 || crop >= size {
+        return sample.clone();
+    }
+    let (pu, pv) = sample.center_pixel(size).unwrap_or((size / 2, size / 2));
+    let margin = CROP_MARGIN_PX.min(crop / 2);
+    let span = (crop - 2 * margin).max(1);
+    let mut origin = |p: u32| {
+        let at = margin + rng.random_range(0..span);
+        let start = p.saturating_sub(at) / CROP_ALIGN_PX * CROP_ALIGN_PX;
+        start.min(size - crop)
+    };
+    let (x0, y0) = (origin(pu), origin(pv));
+    let plane = (size * size) as usize;
+    let channels = sample.input.len() / plane;
+    let window = |values: &[f32]| -> Vec<f32> {
+        let mut out = Vec::with_capacity((crop * crop) as usize);
+        for y in y0..y0 + crop {
+            let row = (y * size + x0) as usize;
+            out.extend_from_slice(&values[row..row + crop as usize]);
+        }
+        out
+    };
+    let mut input = Vec::with_capacity(channels * (crop * crop) as usize);
+    for c in 0..channels {
+        input.extend(window(&sample.input[c * plane..(c + 1) * plane]));
+    }
+    Sample {
+        input,
+        target: window(&sample.target),
+        weight: sample.weight.as_deref().map(window),
+        bin: sample.bin,
+        center: [sample.center[0] - x0 as f32, sample.center[1] - y0 as f32],
+    }
 }
 
 /// Writes an input into `out` as the network sees it: C × H × W (CHW), each value in [0, 1]:
@@ -116,8 +248,10 @@ pub struct LabelledImage {
     pub(crate) image: RgbImage,
     /// Its height plane ([`height_from_depth_mm`] of `<Object>_<k>_depth.png`), loaded for rgbd.
     pub(crate) height: Option<GrayImage>,
-    /// The labelled grasp.
+    /// The labelled (or, for a trial, executed) grasp.
     pub(crate) grasp: PixelGrasp,
+    /// Whether a label or a trial supervises it.
+    pub(crate) supervision: Supervision,
 }
 
 /// Reads labels.json and every image it lists, in file order. Fails, naming the file, when
@@ -169,6 +303,7 @@ pub fn load_dataset(store: &LabelStore, input: InputKind) -> anyhow::Result<Vec<
                 image,
                 height,
                 grasp: label.into(),
+                supervision: Supervision::Label,
             });
         }
     }
@@ -191,8 +326,12 @@ pub(crate) fn split_train_validation(n: usize, seed: u64) -> (Vec<usize>, Vec<us
 /// The sample for one label: augmented with `augmentation` for training, as labelled for
 /// validation (`None`). An augmentation that moves the grasp centre out of the image (so the target would be
 /// empty) is redrawn, up to [`MAX_AUGMENT_TRIES`] times, before the unaugmented sample is used.
+///
+/// Labels and trials go through the same augmentation and rotation; only their targets and
+/// weights differ.
 pub fn training_sample(
     item: &LabelledImage,
+    weighting: TrialWeighting,
     augmentation: Option<(&AugmentConfig, &mut ChaCha8Rng)>,
 ) -> Sample {
     let fingers = fingers(item.grasp);
@@ -200,16 +339,20 @@ pub fn training_sample(
         rgb: item.image.clone(),
         height: item.height.clone(),
     };
+    let build = |image: &NetInput, fingers| match item.supervision {
+        Supervision::Label => make_sample(image, fingers),
+        Supervision::Trial { success } => make_trial_sample(image, fingers, success, weighting),
+    };
     if let Some((config, rng)) = augmentation {
         for _ in 0..MAX_AUGMENT_TRIES {
             let (image, moved) = augment::augment_input(&input, fingers, config, rng);
-            let sample = make_sample(&image, moved);
+            let sample = build(&image, moved);
             if sample.center_pixel(image.rgb.width()).is_some() {
                 return sample;
             }
         }
     }
-    make_sample(&input, fingers)
+    build(&input, fingers)
 }
 
 /// The depth image of one label, or an error naming the first missing file and the fix.
@@ -278,6 +421,7 @@ mod tests {
             image: blobs(&[[grasp.u as f32 + 0.5, grasp.v as f32 + 0.5]]),
             height: None,
             grasp,
+            supervision: Supervision::Label,
         }
     }
 
@@ -417,7 +561,8 @@ mod tests {
         let mut checked = 0;
         for _ in 0..250 {
             let item = blob_item(random_grasp(&mut rng, 30..98));
-            let sample = training_sample(&item, Some((&config, &mut rng)));
+            let sample =
+                training_sample(&item, TrialWeighting::default(), Some((&config, &mut rng)));
             let Some(peak) = sample.center_pixel(128) else {
                 continue;
             };
@@ -446,14 +591,17 @@ mod tests {
             v: 80,
             angle_deg: 45.0,
         });
-        let plain = training_sample(&item, None);
+        let plain = training_sample(&item, TrialWeighting::default(), None);
         assert_eq!(
             plain,
             make_sample(&NetInput::rgb(item.image.clone()), fingers(item.grasp))
         );
         let mut rng = ChaCha8Rng::seed_from_u64(0);
         let config = AugmentConfig::always();
-        assert_ne!(training_sample(&item, Some((&config, &mut rng))), plain);
+        assert_ne!(
+            training_sample(&item, TrialWeighting::default(), Some((&config, &mut rng))),
+            plain
+        );
     }
 
     #[test]
@@ -468,7 +616,11 @@ mod tests {
         let config = AugmentConfig::always();
         let mut rng = ChaCha8Rng::seed_from_u64(5);
         for _ in 0..200 {
-            let sample = training_sample(&corner, Some((&config, &mut rng)));
+            let sample = training_sample(
+                &corner,
+                TrialWeighting::default(),
+                Some((&config, &mut rng)),
+            );
             assert!(sample.center_pixel(128).is_some(), "{:?}", sample.center);
         }
         // Unaugmented, a corner grasp at 45° leaves the image when turned by −45°: the sample
@@ -481,7 +633,7 @@ mod tests {
             },
             ..corner
         };
-        let sample = training_sample(&lost, None);
+        let sample = training_sample(&lost, TrialWeighting::default(), None);
         assert_eq!(sample.center_pixel(128), None, "{:?}", sample.center);
         assert!(sample.target.iter().all(|&t| t == 0.0));
     }
@@ -599,5 +751,36 @@ mod tests {
             others.iter().any(|v| *v != validation),
             "seed has no effect"
         );
+    }
+
+    #[test]
+    fn crops_keep_the_supervised_pixel_inside_their_margin_on_the_pooling_grid() {
+        let mut rng = ChaCha8Rng::seed_from_u64(9);
+        for _ in 0..300 {
+            let grasp = random_grasp(&mut rng, 0..128);
+            let sample = make_sample(
+                &NetInput::rgb(blobs(&[[grasp.u as f32, grasp.v as f32]])),
+                fingers(grasp),
+            );
+            let Some((pu, pv)) = sample.center_pixel(128) else {
+                continue;
+            };
+            let crop = crop_sample(&sample, 64, &mut rng);
+            assert_eq!(crop.target.len(), 64 * 64);
+            assert_eq!(crop.input.len(), 3 * 64 * 64);
+            let (cu, cv) = crop.center_pixel(64).expect("the pixel is in the crop");
+            // The crop's origin is on the 4-px grid, and the target moved with the image.
+            assert_eq!((pu - cu) % CROP_ALIGN_PX, 0);
+            assert_eq!((pv - cv) % CROP_ALIGN_PX, 0);
+            assert_eq!(crop.target[(cv * 64 + cu) as usize], 1.0);
+            for (c, p, origin) in [(cu, pu, pu - cu), (cv, pv, pv - cv)] {
+                let at_image_edge = origin == 0 || origin == 64;
+                assert!(
+                    at_image_edge
+                        || (CROP_MARGIN_PX..64 - CROP_MARGIN_PX + CROP_ALIGN_PX).contains(&c),
+                    "pixel {p} lands at {c} of a crop from {origin}"
+                );
+            }
+        }
     }
 }

@@ -19,3 +19,4 @@ pub mod lock;
 pub(crate) mod observation;
 pub(crate) mod output;
 pub(crate) mod relabel;
+pub mod trials;

@@ -60,6 +60,57 @@ pub struct CheckpointMeta {
     pub train_indices: Vec<usize>,
     /// Validation indices.
     pub val_indices: Vec<usize>,
+    /// What the run was trained on, when it is more than the labels alone (trials, a starting
+    /// checkpoint); absent otherwise, so label-only checkpoints keep their bytes.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trained_on: Option<TrainingData>,
+}
+
+/// The data behind a run: the labels, the trial stores, and the weights it started from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrainingData {
+    /// Labelled images (0 when trained on trials alone).
+    pub labels: usize,
+    /// Each trial store, in the order its samples follow the labels.
+    pub trials: Vec<TrialSource>,
+    /// The checkpoint whose weights the run started from, and its SHA-256; none for fresh
+    /// weights.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<StartWeights>,
+}
+
+/// One trial store a run was trained on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TrialSource {
+    /// The store's folder as given.
+    pub dir: PathBuf,
+    /// Its complete scenes.
+    pub scenes: usize,
+    /// Its trials.
+    pub trials: usize,
+    /// How many of them succeeded.
+    pub successes: usize,
+}
+
+/// The weights a run started from.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StartWeights {
+    /// The checkpoint file.
+    pub path: PathBuf,
+    /// Its SHA-256, hex.
+    pub sha256: String,
+}
+
+/// The SHA-256 of a file, hex: how trial stores and checkpoints name the weights they came
+/// from.
+pub(crate) fn file_sha256(path: &Path) -> anyhow::Result<String> {
+    use sha2::Digest;
+    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    let digest = sha2::Sha256::digest(&bytes);
+    Ok(digest.iter().map(|b| format!("{b:02x}")).collect())
 }
 
 impl CheckpointMeta {
@@ -335,6 +386,7 @@ mod fuzz {
             adam_steps: 16,
             train_indices: vec![0, 2, 3],
             val_indices: vec![1],
+            trained_on: None,
         }
     }
 

@@ -3,7 +3,11 @@
 
 use serde::{Deserialize, Serialize};
 
+use crate::data::dataset::TrialWeighting;
 use crate::data::input::InputKind;
+
+/// The training crop's side by default (docs/departures.md, "Crop training").
+pub(crate) const DEFAULT_CROP: u32 = 64;
 use crate::model::unet::Precision;
 
 /// Training settings (the reference's defaults).
@@ -29,6 +33,46 @@ pub struct TrainConfig {
     /// the bytes they had before the option existed, and older checkpoints read as rgb.
     #[serde(default, skip_serializing_if = "InputKind::is_rgb")]
     pub input: InputKind,
+    /// Side of the square crop around each supervised pixel that a training step sees; 0 trains
+    /// on whole images (as checkpoints made before crops read). Validation always sees whole
+    /// images.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub(crate) crop: u32,
+    /// A trial sample's total loss weight against a label's 1 (`--trial-weight`).
+    #[serde(
+        default = "default_trial_weight",
+        skip_serializing_if = "is_default_trial_weight"
+    )]
+    pub(crate) trial_weight: f32,
+    /// σ of a trial's weighted window in pixels; 0 weights the executed pixel alone.
+    #[serde(default, skip_serializing_if = "is_zero_f32")]
+    pub(crate) trial_sigma_px: f32,
+}
+
+fn is_zero(value: &u32) -> bool {
+    *value == 0
+}
+
+fn is_zero_f32(value: &f32) -> bool {
+    *value == 0.0
+}
+
+fn default_trial_weight() -> f32 {
+    TrialWeighting::default().weight
+}
+
+fn is_default_trial_weight(value: &f32) -> bool {
+    *value == default_trial_weight()
+}
+
+impl TrainConfig {
+    /// How its trial samples are weighted.
+    pub(crate) fn trial_weighting(&self) -> TrialWeighting {
+        TrialWeighting {
+            weight: self.trial_weight,
+            sigma_px: self.trial_sigma_px,
+        }
+    }
 }
 
 impl Default for TrainConfig {
@@ -42,6 +86,9 @@ impl Default for TrainConfig {
             patience: 3,
             precision: Precision::Fp32,
             input: InputKind::Rgb,
+            crop: DEFAULT_CROP,
+            trial_weight: default_trial_weight(),
+            trial_sigma_px: 0.0,
         }
     }
 }

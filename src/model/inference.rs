@@ -149,6 +149,7 @@ mod tests {
             adam_steps: 1,
             train_indices: vec![0],
             val_indices: vec![1],
+            trained_on: None,
         };
         save_checkpoint(&vs, &[], &meta, dir, "best").unwrap();
         dir.join("best.safetensors")

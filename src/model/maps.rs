@@ -150,6 +150,24 @@ impl AffordanceMaps {
             .collect()
     }
 
+    /// An action drawn with probability proportional to its score raised to 1/`temperature`:
+    /// exploration that stays on what the network finds graspable (the empty floor scores near
+    /// 0) while trying what its argmax would not. Falls back to the argmax when every score is 0.
+    pub(crate) fn sample(&self, temperature: f32, rng: &mut impl rand::Rng) -> Choice {
+        let power = 1.0 / temperature.max(1e-3);
+        let weights = self
+            .values
+            .iter()
+            .map(|&s| f64::from(s.max(0.0)).powf(f64::from(power)));
+        match rand::distr::weighted::WeightedIndex::new(weights) {
+            Ok(index) => {
+                let i = rng.sample(&index);
+                self.choice_at(i, self.values[i])
+            }
+            Err(_) => self.choose(),
+        }
+    }
+
     /// The action at a flat index into `values`.
     fn choice_at(&self, index: usize, score: f32) -> Choice {
         let plane = (self.size * self.size) as usize;

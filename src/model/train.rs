@@ -12,11 +12,11 @@ use rand::seq::SliceRandom;
 use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use tch::nn;
-use tch::{Device, Kind, Reduction, Tensor};
+use tch::{Kind, Reduction, Tensor};
 
 use super::config::TrainConfig;
 use crate::data::augment::AugmentConfig;
-use crate::data::dataset::{training_sample, LabelledImage, Sample};
+use crate::data::dataset::{crop_sample, training_sample, LabelledImage, Sample};
 use crate::model::unet::{MiniUNet, Precision};
 
 /// Adam (β 0.9/0.999, ε 1e-8, no weight decay), PyTorch's update rule.
@@ -134,6 +134,7 @@ impl Adam {
 /// N×1×H×W.
 pub(crate) fn batch(samples: &[Sample], size: i64) -> (Tensor, Tensor) {
     let n = samples.len() as i64;
+    debug_assert!(samples.iter().all(|s| s.target.len() as i64 == size * size));
     let inputs: Vec<f32> = samples
         .iter()
         .flat_map(|s| s.input.iter().copied())
@@ -157,6 +158,57 @@ pub(crate) fn loss(
 ) -> Tensor {
     net.forward_with(input, precision)
         .binary_cross_entropy_with_logits::<Tensor>(target, None, None, Reduction::Mean)
+}
+
+/// The per-pixel weights of a batch, N×1×H×W, when any sample is a trial: a label's pixels
+/// share its weight of 1 evenly, a trial's sit where its sample puts them. `None` for labels
+/// alone, whose loss is then the plain mean.
+pub(crate) fn batch_weights(samples: &[Sample], size: i64) -> Option<Tensor> {
+    if samples.iter().all(|s| s.weight.is_none()) {
+        return None;
+    }
+    let plane = (size * size) as usize;
+    let uniform = 1.0 / plane as f32;
+    let mut weights = Vec::with_capacity(samples.len() * plane);
+    for sample in samples {
+        match &sample.weight {
+            Some(w) => weights.extend_from_slice(w),
+            None => weights.extend(std::iter::repeat_n(uniform, plane)),
+        }
+    }
+    Some(Tensor::from_slice(&weights).view([samples.len() as i64, 1, size, size]))
+}
+
+/// BCE-with-logits of a batch's logits: the plain mean over every pixel without weights, else
+/// the weighted sum per sample, averaged over the samples (which equals the plain mean for
+/// labels alone).
+pub(crate) fn weighted_loss(logits: &Tensor, target: &Tensor, weights: Option<&Tensor>) -> Tensor {
+    match weights {
+        None => {
+            logits.binary_cross_entropy_with_logits::<Tensor>(target, None, None, Reduction::Mean)
+        }
+        Some(w) => {
+            let n = logits.size()[0] as f64;
+            logits.binary_cross_entropy_with_logits::<&Tensor>(
+                target,
+                Some(w),
+                None,
+                Reduction::Sum,
+            ) / n
+        }
+    }
+}
+
+/// The loss of a batch of samples.
+fn samples_loss(net: &MiniUNet, samples: &[Sample], precision: Precision) -> Tensor {
+    let size = (samples[0].target.len() as f64).sqrt() as i64;
+    let (input, target) = batch(samples, size);
+    let weights = batch_weights(samples, size);
+    weighted_loss(
+        &net.forward_with(&input, precision),
+        &target,
+        weights.as_ref(),
+    )
 }
 
 /// The per-epoch RNG: a pure function of the seed and the epoch, so a resumed run draws the
@@ -192,18 +244,19 @@ pub(crate) fn train_epoch(
     order.shuffle(&mut rng);
     let mut total = 0.0;
     let mut count = 0usize;
+    let weighting = config.trial_weighting();
     for (b, chunk) in order.chunks(config.batch_size).enumerate() {
         let samples: Vec<Sample> = chunk
             .iter()
-            .map(|&i| training_sample(&data.images[i], Some((augment, &mut rng))))
+            .map(|&i| {
+                let sample = training_sample(&data.images[i], weighting, Some((augment, &mut rng)));
+                match config.crop {
+                    0 => sample,
+                    crop => crop_sample(&sample, crop, &mut rng),
+                }
+            })
             .collect();
-        let (input, target) = batch(&samples, crate::grasp::IMAGE_SIZE as i64);
-        let l = loss(
-            net,
-            &input.to_device(Device::Cpu),
-            &target,
-            config.precision,
-        );
+        let l = samples_loss(net, &samples, config.precision);
         l.backward();
         adam.step();
         let value = l.double_value(&[]);
@@ -224,11 +277,10 @@ pub(crate) fn validate(net: &MiniUNet, data: Subset, config: &TrainConfig) -> f6
         for chunk in indices.chunks(batch_size) {
             let samples: Vec<Sample> = chunk
                 .iter()
-                .map(|&i| training_sample(&images[i], None))
+                .map(|&i| training_sample(&images[i], config.trial_weighting(), None))
                 .collect();
-            let (input, target) = batch(&samples, crate::grasp::IMAGE_SIZE as i64);
-            total +=
-                loss(net, &input, &target, config.precision).double_value(&[]) * chunk.len() as f64;
+            total += samples_loss(net, &samples, config.precision).double_value(&[])
+                * chunk.len() as f64;
         }
         total / indices.len().max(1) as f64
     })
@@ -254,6 +306,7 @@ pub(crate) fn predict_map(net: &MiniUNet, sample: &Sample, precision: Precision)
 mod tests {
     use super::*;
     use tch::nn::{Module, OptimizerConfig};
+    use tch::Device;
 
     #[test]
     fn adam_matches_libtorch_adam_step_for_step() {
@@ -295,5 +348,110 @@ mod tests {
         assert_eq!(a, epoch_rng(1, 3).random::<u64>());
         assert_ne!(a, epoch_rng(1, 4).random::<u64>());
         assert_ne!(a, epoch_rng(2, 3).random::<u64>());
+    }
+
+    /// A trial item: a bright square under the grasp, executed at `angle_deg`.
+    fn trial_item(success: bool, angle_deg: f32) -> LabelledImage {
+        use crate::data::dataset::Supervision;
+        let grasp = crate::grasp::PixelGrasp {
+            u: 70,
+            v: 52,
+            angle_deg,
+        };
+        LabelledImage {
+            object: "Box".into(),
+            k: 1,
+            image: image::RgbImage::from_fn(128, 128, |u, v| {
+                let inside = (60..80).contains(&u) && (45..60).contains(&v);
+                image::Rgb(if inside { [220, 40, 40] } else { [90, 90, 90] })
+            }),
+            height: None,
+            grasp,
+            supervision: Supervision::Trial { success },
+        }
+    }
+
+    #[test]
+    fn a_trial_puts_gradient_only_at_its_executed_pixel_and_rotation() {
+        use crate::data::dataset::TrialWeighting;
+        let weighting = TrialWeighting {
+            weight: 0.01,
+            sigma_px: 0.0,
+        };
+        for (success, angle) in [(true, 45.0), (false, 112.5)] {
+            let sample = training_sample(&trial_item(success, angle), weighting, None);
+            // The sample is the image turned to the executed rotation's bin.
+            assert_eq!(sample.bin, crate::grasp::angle_bin(angle));
+            let (pu, pv) = sample.center_pixel(128).expect("the centre stays inside");
+            let logits = Tensor::zeros([1, 1, 128, 128], (Kind::Float, tch::Device::Cpu))
+                .set_requires_grad(true);
+            let (_, target) = batch(std::slice::from_ref(&sample), 128);
+            let weights = batch_weights(std::slice::from_ref(&sample), 128).unwrap();
+            weighted_loss(&logits, &target, Some(&weights)).backward();
+            let grad = Vec::<f32>::try_from(logits.grad().flatten(0, -1)).unwrap();
+            let nonzero: Vec<usize> = (0..grad.len()).filter(|&i| grad[i] != 0.0).collect();
+            assert_eq!(nonzero, [(pv * 128 + pu) as usize], "success {success}");
+            // BCE at logit 0: the gradient is the weight times (σ(0) − target).
+            let expected = 0.01 * (0.5 - if success { 1.0 } else { 0.0 });
+            assert!(
+                (grad[nonzero[0]] - expected).abs() < 1e-7,
+                "{}",
+                grad[nonzero[0]]
+            );
+        }
+    }
+
+    #[test]
+    fn labels_alone_keep_the_plain_mean_loss() {
+        tch::manual_seed(3);
+        let logits = Tensor::randn([2, 1, 16, 16], (Kind::Float, tch::Device::Cpu));
+        let target = Tensor::rand([2, 1, 16, 16], (Kind::Float, tch::Device::Cpu));
+        let uniform = Tensor::full([2, 1, 16, 16], 1.0 / 256.0, (Kind::Float, tch::Device::Cpu));
+        let plain = weighted_loss(&logits, &target, None).double_value(&[]);
+        let weighted = weighted_loss(&logits, &target, Some(&uniform)).double_value(&[]);
+        assert!(
+            (plain - weighted).abs() < 1e-6,
+            "{plain} against {weighted}"
+        );
+    }
+
+    #[test]
+    fn a_crop_scores_as_the_whole_image_away_from_its_edge() {
+        tch::manual_seed(5);
+        let vs = nn::VarStore::new(tch::Device::Cpu);
+        let net = MiniUNet::new(&vs.root());
+        let image = Tensor::rand([1, 3, 128, 128], (Kind::Float, tch::Device::Cpu));
+        let whole = tch::no_grad(|| net.forward_with(&image, Precision::Fp32));
+        let margin = crate::data::dataset::CROP_MARGIN_PX as i64;
+        let worst_inside = |x0: i64, y0: i64| {
+            let crop = image.narrow(2, y0, 64).narrow(3, x0, 64);
+            let out = tch::no_grad(|| net.forward_with(&crop, Precision::Fp32));
+            let inner = |t: &Tensor| {
+                t.narrow(2, margin, 64 - 2 * margin)
+                    .narrow(3, margin, 64 - 2 * margin)
+            };
+            let whole_part = whole.narrow(2, y0, 64).narrow(3, x0, 64);
+            let inside = (inner(&out) - inner(&whole_part))
+                .abs()
+                .max()
+                .double_value(&[]);
+            let anywhere = (&out - &whole_part).abs().max().double_value(&[]);
+            (inside, anywhere)
+        };
+        // On the pooling grid, the inside of the crop is the whole image's output...
+        let (inside, anywhere) = worst_inside(32, 44);
+        assert!(
+            inside < 1e-5,
+            "inside the margin the crop differs by {inside}"
+        );
+        // ...and the edge, where the crop's zero padding replaces the image, is not: the test
+        // can tell.
+        assert!(
+            anywhere > 1e-3,
+            "the edge matches too ({anywhere}): the margin is not needed"
+        );
+        // Off the grid (an odd offset), the pooling windows differ everywhere.
+        let (inside, _) = worst_inside(33, 44);
+        assert!(inside > 1e-4, "an off-grid crop matched ({inside})");
     }
 }

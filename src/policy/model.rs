@@ -108,6 +108,36 @@ impl ModelPolicy {
     }
 }
 
+impl ModelPolicy {
+    /// Exploration: an action drawn from the network's maps (after suppression, before any
+    /// check) with probability ∝ score^(1/`temperature`), executed as drawn, so that the model
+    /// also learns where its own unchecked choices fail (docs/learning.md, "Trials").
+    pub(crate) fn explore(
+        &self,
+        view: &Observation,
+        memory: &Suppression,
+        temperature: f32,
+        rng: &mut impl rand::Rng,
+    ) -> Decision {
+        let start = Instant::now();
+        let kind = self.model.input();
+        let depth = (kind == InputKind::Rgbd).then(|| view.frame.to_depth_image_mm());
+        let input = NetInput::new(kind, view.rgb.clone(), depth.as_ref());
+        let Scored { rotated, mut maps } = self
+            .model
+            .score(&input)
+            .expect("the policy builds the input its model was trained on");
+        memory.apply(&mut maps);
+        let choice = maps.sample(temperature, rng);
+        Decision {
+            grasp: Ok(choice.grasp),
+            choice: Some(choice),
+            vis: Some(visualisation(&rotated, &maps, &choice)),
+            network_seconds: start.elapsed().as_secs_f64(),
+        }
+    }
+}
+
 impl Policy for ModelPolicy {
     fn decide(&self, view: &Observation, memory: &Suppression) -> Decision {
         let ModelPolicyConfig {

@@ -8,6 +8,7 @@
 mod bad_input;
 mod browser;
 mod cli;
+mod collect;
 mod common;
 mod depth;
 mod eval;

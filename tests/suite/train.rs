@@ -164,6 +164,7 @@ fn a_checkpoint_round_trips_bit_exactly() {
         adam_steps: 70,
         train_indices: vec![0, 2],
         val_indices: vec![1],
+        trained_on: None,
     };
     save_checkpoint(&vs, &[], &meta, dir.path(), "best").unwrap();
     let (tensors, back) = read_checkpoint(dir.path(), "best").unwrap();

@@ -1,0 +1,287 @@
+//! `graspmap improve`: the self-supervised loop. Each round collects trials with the current
+//! model, then retrains from it on the labels and every round's trials so far (docs/learning.md,
+//! "Learning from trials").
+//!
+//! Every stage is the real command with its own guarantees: a round's store resumes like
+//! `collect`, its model like `train`, so an interrupted loop rerun with the same flags continues
+//! where it stopped and ends with the same bytes.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::Context as _;
+
+use super::collect::CollectConfig;
+use super::eval::EvalConfig;
+use super::train::TrainOptions;
+use super::Context;
+use crate::data::atomic::write_atomic;
+use crate::data::trials::TrialStore;
+use crate::model::config::TrainConfig;
+use crate::model::unet::Precision;
+use crate::policy::model::ModelPolicyConfig;
+use crate::policy::suppression::SuppressionConfig;
+use crate::policy::PolicyKind;
+use crate::present::eval_report::Task;
+
+/// What `graspmap improve` runs, resolved by the CLI.
+#[derive(Debug, Clone)]
+pub(crate) struct ImproveConfig {
+    /// Where the rounds go: `round_RR/trials` and `round_RR/model` each, and `summary.json`.
+    pub(crate) out: PathBuf,
+    /// Rounds of collect-then-retrain.
+    pub(crate) rounds: u32,
+    /// The model the first round collects with (the labelled model).
+    pub(crate) start: PathBuf,
+    /// The labels every round trains on as well.
+    pub(crate) labels: PathBuf,
+    /// The collection of every round; its store, seed and checkpoint are set per round.
+    pub(crate) collect: CollectConfig,
+    /// The retraining of every round; its seed is set per round.
+    pub(crate) train: TrainConfig,
+    /// Evaluate each round's model on empty_bin with these seeds.
+    pub(crate) eval_seeds: Option<Vec<u64>>,
+}
+
+/// One round's line of `summary.json`.
+#[derive(Debug, Clone, serde::Serialize)]
+struct RoundSummary {
+    round: u32,
+    collected_with: PathBuf,
+    trials: usize,
+    successes: usize,
+    collection_success_rate: f64,
+    trials_so_far: usize,
+    best_val_loss: f64,
+    model: PathBuf,
+    collect_seconds: f64,
+    train_seconds: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    eval: Option<EvalSummary>,
+}
+
+/// The figures of a round's empty_bin evaluation.
+#[derive(Debug, Clone, serde::Serialize)]
+struct EvalSummary {
+    seeds: Vec<u64>,
+    moved_mean: f64,
+    pick_success_rate: f64,
+    report: PathBuf,
+    seconds: f64,
+}
+
+/// Runs the command.
+pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()> {
+    let start_meta = crate::model::checkpoint::read(
+        &config.start,
+        "train the labelled model first (graspmap train), or pass --checkpoint PATH",
+    )?
+    .meta;
+    let input = start_meta.map_or_else(Default::default, |m| m.config.input);
+    let mut summaries: Vec<RoundSummary> = Vec::new();
+    let mut current = config.start.clone();
+    let mut stores: Vec<PathBuf> = Vec::new();
+    for round in 1..=config.rounds {
+        let dir = config.out.join(format!("round_{round:02}"));
+        context.say(&format!(
+            "round {round}/{}: collecting {} scenes with {}",
+            config.rounds,
+            config.collect.scenes,
+            current.display()
+        ));
+        let collect_start = Instant::now();
+        let collect = CollectConfig {
+            out: dir.join("trials"),
+            seed: round_seed(config.collect.seed, round),
+            checkpoint: current.clone(),
+            ..config.collect.clone()
+        };
+        super::collect::run(context, collect.clone())?;
+        let collect_seconds = collect_start.elapsed().as_secs_f64();
+        stores.push(collect.out.clone());
+
+        context.say(&format!(
+            "round {round}/{}: retraining from {} on the labels and {} trial store(s)",
+            config.rounds,
+            current.display(),
+            stores.len()
+        ));
+        let train_start = Instant::now();
+        let model_dir = dir.join("model");
+        let train = TrainOptions {
+            config: TrainConfig {
+                seed: round_seed(config.train.seed, round),
+                input,
+                ..config.train.clone()
+            },
+            resume: false,
+            force: false,
+            out_dir: model_dir.clone(),
+            labels: Some(config.labels.clone()),
+            trials: stores.clone(),
+            start_from: Some(current.clone()),
+        };
+        super::train::run(context, train)?;
+        let train_seconds = train_start.elapsed().as_secs_f64();
+        let model = model_dir.join("best.safetensors");
+
+        let eval = match &config.eval_seeds {
+            Some(seeds) => Some(evaluate(
+                context,
+                &dir,
+                &model,
+                seeds,
+                config.collect.precision,
+            )?),
+            None => None,
+        };
+        let (trials, successes) = count_trials(&collect.out)?;
+        let best_val_loss = crate::model::checkpoint::read(&model, "rerun the round")?
+            .meta
+            .map_or(f64::NAN, |m| m.best_val_loss);
+        summaries.push(RoundSummary {
+            round,
+            collected_with: current.clone(),
+            trials,
+            successes,
+            collection_success_rate: successes as f64 / trials.max(1) as f64,
+            trials_so_far: summaries.iter().map(|s| s.trials).sum::<usize>() + trials,
+            best_val_loss,
+            model: model.clone(),
+            collect_seconds,
+            train_seconds,
+            eval,
+        });
+        let summary = summaries.last().expect("just pushed");
+        write_json(&dir.join("summary.json"), summary)?;
+        write_json(&config.out.join("summary.json"), &summaries)?;
+        context.say(&round_line(summary));
+        current = model;
+    }
+    context.say(&format!(
+        "the improved model is {}; evaluate it with graspmap eval --checkpoint {}",
+        current.display(),
+        current.display()
+    ));
+    if let Some(json) = &context.json {
+        let resolved = serde_json::json!({
+            "global": context,
+            "rounds": config.rounds,
+            "out": config.out,
+            "start": config.start,
+            "scenes": config.collect.scenes,
+            "eval_seeds": config.eval_seeds,
+        });
+        crate::present::envelope::write_report(
+            json,
+            "improve",
+            config.collect.seed,
+            &resolved,
+            &summaries,
+        )?;
+    }
+    Ok(())
+}
+
+/// A round's seed: its own, so rounds never repeat a scene or a data order.
+fn round_seed(seed: u64, round: u32) -> u64 {
+    seed.wrapping_mul(1_000).wrapping_add(u64::from(round))
+}
+
+/// The trials and successes of a store.
+fn count_trials(dir: &Path) -> anyhow::Result<(usize, usize)> {
+    let store = TrialStore::new(dir);
+    let mut trials = 0;
+    let mut successes = 0;
+    for scene in store.scenes()? {
+        if let Some(record) = store.load_scene(scene)? {
+            trials += record.trials.len();
+            successes += record.trials.iter().filter(|t| t.success).count();
+        }
+    }
+    Ok((trials, successes))
+}
+
+/// empty_bin with the round's model and failure memory 8, reported into the round's folder.
+fn evaluate(
+    context: &Context,
+    dir: &Path,
+    model: &Path,
+    seeds: &[u64],
+    precision: Precision,
+) -> anyhow::Result<EvalSummary> {
+    let start = Instant::now();
+    let report = dir.join("eval_empty_bin.json");
+    let eval_context = Context {
+        data: dir.to_path_buf(),
+        json: Some(report.clone()),
+        ..context.clone()
+    };
+    let config = EvalConfig {
+        task: Task::EmptyBin,
+        policy: PolicyKind::Model,
+        checkpoint: model.to_path_buf(),
+        precision,
+        seeds: seeds.to_vec(),
+        suppression: SuppressionConfig {
+            remember: 8,
+            ..SuppressionConfig::default()
+        },
+        model: ModelPolicyConfig::default(),
+        max_attempts: 25,
+        record: None,
+        resume: false,
+        check_invariants: false,
+    };
+    super::eval::run(&eval_context, config)?;
+    let text = std::fs::read_to_string(&report)
+        .with_context(|| format!("reading {}", report.display()))?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{} is not JSON", report.display()))?;
+    let runs = value["results"]["runs"]
+        .as_array()
+        .cloned()
+        .unwrap_or_default();
+    let moved: Vec<f64> = runs
+        .iter()
+        .filter_map(|r| r["bin"]["moved"].as_f64())
+        .collect();
+    let attempts: Vec<bool> = runs
+        .iter()
+        .flat_map(|r| r["attempts"].as_array().cloned().unwrap_or_default())
+        .map(|a| a["success"].as_bool().unwrap_or(false))
+        .collect();
+    Ok(EvalSummary {
+        seeds: seeds.to_vec(),
+        moved_mean: moved.iter().sum::<f64>() / moved.len().max(1) as f64,
+        pick_success_rate: attempts.iter().filter(|&&s| s).count() as f64
+            / attempts.len().max(1) as f64,
+        report,
+        seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+fn round_line(summary: &RoundSummary) -> String {
+    let mut line = format!(
+        "round {}: {} trials ({:.1} % succeeded), best validation loss {:.5}, collect {:.0} s, train {:.0} s",
+        summary.round,
+        summary.trials,
+        100.0 * summary.collection_success_rate,
+        summary.best_val_loss,
+        summary.collect_seconds,
+        summary.train_seconds
+    );
+    if let Some(eval) = &summary.eval {
+        line += &format!(
+            "; empty_bin {:.1} moved, {:.1} % picks",
+            eval.moved_mean,
+            100.0 * eval.pick_success_rate
+        );
+    }
+    line
+}
+
+fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> {
+    let text = serde_json::to_string_pretty(value)? + "\n";
+    write_atomic(path, text.as_bytes())
+}

@@ -1,0 +1,258 @@
+//! `graspmap merge`: shard trial stores into one store, equal byte for byte to the store one
+//! unsharded `collect` writes (docs/data.md, "Trials").
+
+use std::path::{Path, PathBuf};
+
+use anyhow::{bail, Context as _};
+
+use super::Context;
+use crate::data::trials::{Manifest, Shard, TrialStore, MANIFEST_FILE};
+use crate::named::counted;
+use crate::present::envelope::write_report;
+
+/// What `graspmap merge` runs.
+#[derive(Debug, Clone)]
+pub(crate) struct MergeConfig {
+    /// The shard stores.
+    pub(crate) inputs: Vec<PathBuf>,
+    /// The merged store's folder; must not exist yet, or be empty.
+    pub(crate) out: PathBuf,
+    /// Write what is there when shards are missing, marked partial.
+    pub(crate) allow_partial: bool,
+}
+
+/// Runs the command.
+pub(crate) fn run(context: &Context, config: MergeConfig) -> anyhow::Result<()> {
+    let shards = read_shards(&config.inputs)?;
+    let first = &shards[0];
+    let count = first.shard.count;
+    let mut missing: Vec<Shard> = (1..=count)
+        .map(|index| Shard { index, count })
+        .filter(|s| !shards.iter().any(|given| given.shard == *s))
+        .collect();
+    missing.sort_by_key(|s| s.index);
+    if !missing.is_empty() && !config.allow_partial {
+        let names: Vec<String> = missing.iter().map(Shard::to_string).collect();
+        bail!(
+            "shards {} of {count} are missing (collect them with --shard I/{count}, or pass --allow-partial to merge what is there)",
+            names.join(", ")
+        );
+    }
+    check_output(&config.out)?;
+    let staging = staging_dir(&config.out);
+    if staging.exists() {
+        std::fs::remove_dir_all(&staging)
+            .with_context(|| format!("removing the unfinished {}", staging.display()))?;
+    }
+    let merged = TrialStore::new(&staging);
+    let mut scenes = 0;
+    let mut trials = 0;
+    for shard in &shards {
+        for scene in shard.store.scenes()? {
+            copy_dir(&shard.store.scene_dir(scene), &merged.scene_dir(scene))?;
+            scenes += 1;
+            trials += shard
+                .store
+                .load_scene(scene)?
+                .map_or(0, |record| record.trials.len());
+        }
+    }
+    merged.save_manifest(&Manifest {
+        schema: Manifest::SCHEMA.to_owned(),
+        settings: first.manifest.settings.clone(),
+        shard: None,
+        missing_shards: missing.clone(),
+    })?;
+    if config.out.exists() {
+        std::fs::remove_dir(&config.out)
+            .with_context(|| format!("replacing the empty {}", config.out.display()))?;
+    }
+    std::fs::rename(&staging, &config.out).with_context(|| {
+        format!(
+            "moving the merged store into place at {}",
+            config.out.display()
+        )
+    })?;
+    context.say(&format!(
+        "merged {} of {count} ({} with {}) into {}{}",
+        counted(shards.len(), "shard"),
+        counted(scenes, "scene"),
+        counted(trials, "trial"),
+        config.out.display(),
+        match missing.is_empty() {
+            true => String::new(),
+            false => format!(" (partial: {} missing)", counted(missing.len(), "shard")),
+        }
+    ));
+    if let Some(json) = &context.json {
+        let resolved = serde_json::json!({
+            "global": context,
+            "inputs": config.inputs,
+            "out": config.out,
+            "allow_partial": config.allow_partial,
+        });
+        let results = serde_json::json!({
+            "out": config.out,
+            "shards": shards.len(),
+            "of": count,
+            "missing": missing.iter().map(Shard::to_string).collect::<Vec<_>>(),
+            "scenes": scenes,
+            "trials": trials,
+        });
+        write_report(json, "merge", 0, &resolved, &results)?;
+    }
+    Ok(())
+}
+
+/// One input store with its settings and shard.
+struct ShardStore {
+    store: TrialStore,
+    manifest: Manifest,
+    shard: Shard,
+}
+
+/// Reads and checks every input: a whole, sound shard store each, all of one run, no two the
+/// same shard.
+fn read_shards(inputs: &[PathBuf]) -> anyhow::Result<Vec<ShardStore>> {
+    let mut shards: Vec<ShardStore> = Vec::new();
+    for dir in inputs {
+        let store = TrialStore::new(dir);
+        let manifest = store.load_manifest()?.with_context(|| {
+            format!(
+                "{}: missing; {} is not a trial store (give the folders `graspmap collect --shard I/N` wrote)",
+                store.manifest_path().display(),
+                dir.display()
+            )
+        })?;
+        if let Some(problem) = store.check().into_iter().next() {
+            bail!(
+                "{} is damaged: {problem} (recollect that shard with the same flags)",
+                dir.display()
+            );
+        }
+        let Some(shard) = manifest.shard else {
+            bail!(
+                "{} holds a whole run, not a shard; merge combines the stores of `collect --shard I/N`",
+                dir.display()
+            );
+        };
+        let settings = &manifest.settings;
+        let scenes = settings["scenes"].as_u64().unwrap_or(0);
+        let expected: Vec<u64> = (0..scenes).filter(|&s| shard.holds(s)).collect();
+        let held = store.scenes()?;
+        if held != expected {
+            let absent: Vec<String> = expected
+                .iter()
+                .filter(|s| !held.contains(s))
+                .map(u64::to_string)
+                .collect();
+            bail!(
+                "{} (shard {shard}) is unfinished: scenes {} are missing; rerun its collect command to finish it",
+                dir.display(),
+                if absent.is_empty() {
+                    "outside the shard are present, and".to_owned()
+                } else {
+                    absent.join(", ")
+                }
+            );
+        }
+        if let Some(first) = shards.first() {
+            if first.manifest.settings != *settings {
+                let keys = differing(&first.manifest.settings, settings);
+                bail!(
+                    "{} was collected with other settings than {} ({}differ); merge only the shards of one run",
+                    store.manifest_path().display(),
+                    first.store.manifest_path().display(),
+                    keys
+                );
+            }
+            if first.shard.count != shard.count {
+                bail!(
+                    "{} is shard {shard}, and {} is shard {}: the shard counts differ; merge only the shards of one run",
+                    dir.display(),
+                    first.store.dir().display(),
+                    first.shard
+                );
+            }
+        }
+        if let Some(twin) = shards.iter().find(|s| s.shard == shard) {
+            bail!(
+                "{} and {} both hold shard {shard}: the shards overlap; give each shard once",
+                twin.store.dir().display(),
+                dir.display()
+            );
+        }
+        shards.push(ShardStore {
+            store,
+            manifest,
+            shard,
+        });
+    }
+    if shards.is_empty() {
+        bail!("merge needs at least one shard store (the folders `graspmap collect --shard I/N` wrote)");
+    }
+    Ok(shards)
+}
+
+/// "checkpoint, seed " — the top-level settings that differ, for the refusal.
+fn differing(a: &serde_json::Value, b: &serde_json::Value) -> String {
+    let (Some(a), Some(b)) = (a.as_object(), b.as_object()) else {
+        return String::new();
+    };
+    let mut keys: Vec<&String> = a
+        .keys()
+        .chain(b.keys())
+        .filter(|k| a.get(k.as_str()) != b.get(k.as_str()))
+        .collect();
+    keys.sort();
+    keys.dedup();
+    keys.iter().map(|k| format!("{k} ")).collect()
+}
+
+/// The merged store's folder must be new or empty: a merge never replaces a store.
+fn check_output(out: &Path) -> anyhow::Result<()> {
+    crate::data::output::check_output_dir(
+        out.parent()
+            .filter(|p| !p.as_os_str().is_empty())
+            .unwrap_or(Path::new(".")),
+        "the merged store's parent folder",
+    )?;
+    if out.join(MANIFEST_FILE).exists()
+        || out
+            .read_dir()
+            .map(|mut entries| entries.next().is_some())
+            .unwrap_or(false)
+    {
+        bail!(
+            "--out {} is not empty; merge writes a new store: give a new folder, or remove that one",
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+/// Where the merge is built before one rename moves it into place.
+fn staging_dir(out: &Path) -> PathBuf {
+    let name = out
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "trials".to_owned());
+    out.with_file_name(format!(".{name}.merging"))
+}
+
+/// Copies a scene's folder (plain files only).
+fn copy_dir(from: &Path, to: &Path) -> anyhow::Result<()> {
+    std::fs::create_dir_all(to).with_context(|| format!("creating {}", to.display()))?;
+    let mut entries: Vec<_> = std::fs::read_dir(from)
+        .with_context(|| format!("reading {}", from.display()))?
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("reading {}", from.display()))?;
+    entries.sort_by_key(|e| e.file_name());
+    for entry in entries {
+        let target = to.join(entry.file_name());
+        std::fs::copy(entry.path(), &target).with_context(|| {
+            format!("copying {} to {}", entry.path().display(), target.display())
+        })?;
+    }
+    Ok(())
+}

@@ -1,0 +1,355 @@
+//! `graspmap collect`, `merge` and `train --trials` end to end: the trial store's bytes, resume
+//! after a kill, `--check`, shards that merge into the unsharded store, and the refusals.
+
+use std::path::{Path, PathBuf};
+
+use crate::common::{assert_ok, assert_user_error, graspmap, send_signal};
+use crate::eval::read_json;
+
+const TRAIN: [&str; 3] = ["YcbTomatoSoupCan", "YcbFoamBrick", "YcbGelatinBox"];
+const TEST: [&str; 2] = ["YcbBanana", "YcbHammer"];
+
+/// A data directory with an untrained (seeded) checkpoint and a split of three training and two
+/// test objects.
+struct Setup {
+    dir: tempfile::TempDir,
+}
+
+impl Setup {
+    fn new() -> Self {
+        let dir = tempfile::tempdir().unwrap();
+        let split = serde_json::json!({ "train": TRAIN, "test": TEST });
+        std::fs::write(dir.path().join("split.json"), split.to_string()).unwrap();
+        tch::manual_seed(11);
+        let vs = tch::nn::VarStore::new(tch::Device::Cpu);
+        let _net = graspmap::model::unet::MiniUNet::new(&vs.root());
+        let named: Vec<(String, tch::Tensor)> = vs.variables().into_iter().collect();
+        std::fs::create_dir_all(dir.path().join("affordance")).unwrap();
+        tch::Tensor::write_safetensors(&named, dir.path().join("affordance/best.safetensors"))
+            .unwrap();
+        Self { dir }
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.dir.path().join(name)
+    }
+
+    /// `collect` of 4 small scenes (2 objects, at most 2 attempts) into `out`, plus `extra`.
+    fn args(&self, out: &str, threads: &str, extra: &[&str]) -> Vec<String> {
+        let mut args: Vec<String> = [
+            "--data",
+            self.dir.path().to_str().unwrap(),
+            "--split",
+            self.path("split.json").to_str().unwrap(),
+            "--threads",
+            threads,
+            "collect",
+            "--out",
+            self.path(out).to_str().unwrap(),
+            "--scenes",
+            "4",
+            "--clutter",
+            "2",
+            "--explore",
+            "0.5",
+        ]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+        if !extra.contains(&"--seed") {
+            args.extend(["--seed".to_owned(), "5".to_owned()]);
+        }
+        if !extra.contains(&"--max-attempts") {
+            args.extend(["--max-attempts".to_owned(), "2".to_owned()]);
+        }
+        args.extend(extra.iter().map(|s| s.to_string()));
+        args
+    }
+
+    fn collect(&self, out: &str, extra: &[&str]) -> std::process::Output {
+        let args = self.args(out, "2", extra);
+        graspmap(&args.iter().map(String::as_str).collect::<Vec<_>>())
+    }
+}
+
+/// Every file of a store but the writer's lock, by relative path, with its bytes.
+fn store_bytes(dir: &Path) -> Vec<(String, Vec<u8>)> {
+    let mut files = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(folder) = stack.pop() {
+        for entry in std::fs::read_dir(&folder).unwrap().flatten() {
+            let path = entry.path();
+            if path.is_dir() {
+                stack.push(path);
+            } else if entry.file_name() != ".lock" {
+                let name = path
+                    .strip_prefix(dir)
+                    .unwrap()
+                    .to_string_lossy()
+                    .into_owned();
+                files.push((name, std::fs::read(&path).unwrap()));
+            }
+        }
+    }
+    files.sort();
+    files
+}
+
+#[test]
+fn collect_stores_every_attempt_of_training_objects_and_repeats_itself_byte_for_byte() {
+    let setup = Setup::new();
+    let json = setup.path("collect.json");
+    let out = setup.collect("trials", &["--json", json.to_str().unwrap()]);
+    assert_ok(&out);
+    let report = read_json(&json);
+    let trials = report["results"]["trials"].as_u64().unwrap();
+    assert!(trials >= 4, "{report}");
+    assert_eq!(report["results"]["scenes"], 4);
+
+    let store = setup.path("trials");
+    let mut policies = std::collections::BTreeSet::new();
+    let mut failures = 0;
+    for scene in 0..4 {
+        let record = read_json(&store.join(format!("scene_{scene:06}/trials.json")));
+        assert_eq!(record["complete"], true);
+        let objects: Vec<&str> = record["objects"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|o| o.as_str().unwrap())
+            .collect();
+        assert_eq!(objects.len(), 2);
+        for trial in record["trials"].as_array().unwrap() {
+            policies.insert(trial["policy"].as_str().unwrap().to_owned());
+            failures += usize::from(trial["success"] == false);
+            // A test object is never dropped, aimed at or held.
+            for field in [&trial["aimed_at"], &trial["held"]] {
+                if let Some(name) = field.as_str() {
+                    assert!(TRAIN.contains(&name), "{name} in {trial}");
+                }
+            }
+            let rotation = trial["rotation"].as_u64().unwrap();
+            let angle = trial["grasp"]["angle_deg"].as_f64().unwrap();
+            assert_eq!(
+                ((angle / 22.5).round() as u64) % 8,
+                rotation,
+                "the rotation is the executed angle's bin: {trial}"
+            );
+            let a = trial["attempt"].as_u64().unwrap();
+            let rgb = image::open(store.join(format!("scene_{scene:06}/{a:02}_rgb.png"))).unwrap();
+            assert_eq!((rgb.width(), rgb.height()), (128, 128));
+        }
+        for name in &objects {
+            assert!(TRAIN.contains(name) && !TEST.contains(name), "{name}");
+        }
+    }
+    // The untrained model fails often, and --explore 0.5 with mix tries all three kinds.
+    assert!(failures > 0, "no failure stored");
+    assert!(policies.contains("oracle"), "{policies:?}");
+    assert!(
+        policies.contains("explore") || policies.contains("model"),
+        "{policies:?}"
+    );
+    let settings = read_json(&store.join("collect.json"));
+    assert_eq!(settings["schema"], "graspmap.trials/1");
+    assert_eq!(settings["settings"]["objects"], serde_json::json!(TRAIN));
+    assert_eq!(
+        settings["settings"]["checkpoint"]["sha256"]
+            .as_str()
+            .unwrap()
+            .len(),
+        64
+    );
+
+    // The same seed on one thread writes the same bytes.
+    let args = setup.args("again", "1", &[]);
+    assert_ok(&graspmap(
+        &args.iter().map(String::as_str).collect::<Vec<_>>(),
+    ));
+    assert_eq!(store_bytes(&store), store_bytes(&setup.path("again")));
+
+    // --check passes, then names a torn image and exits 2.
+    let check = |dir: &str| {
+        graspmap(&[
+            "--data",
+            setup.dir.path().to_str().unwrap(),
+            "--split",
+            setup.path("split.json").to_str().unwrap(),
+            "collect",
+            "--check",
+            "--out",
+            setup.path(dir).to_str().unwrap(),
+        ])
+    };
+    assert_ok(&check("trials"));
+    std::fs::write(store.join("scene_000002/00_rgb.png"), b"torn").unwrap();
+    let out = check("trials");
+    assert_eq!(out.status.code(), Some(2));
+    assert!(
+        String::from_utf8_lossy(&out.stdout).contains("scene_000002/00_rgb.png"),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+
+    // Another seed is refused on this store, naming it and the way out.
+    let out = setup.collect("again", &["--seed", "6"]);
+    assert_user_error(&out, &["again", "other settings", "seed", "--force"]);
+
+    // train --trials records what it was trained on.
+    let data = setup.dir.path().to_str().unwrap();
+    let out = graspmap(&[
+        "--data",
+        data,
+        "train",
+        "--trials",
+        setup.path("again").to_str().unwrap(),
+        "--no-labels",
+        "--epochs",
+        "1",
+        "--out-dir",
+        setup.path("model").to_str().unwrap(),
+    ]);
+    assert_ok(&out);
+    let meta = read_json(&setup.path("model/best.json"));
+    let source = &meta["trained_on"]["trials"][0];
+    assert_eq!(source["trials"].as_u64().unwrap(), trials);
+    assert_eq!(meta["trained_on"]["labels"], 0);
+    assert_eq!(meta["config"]["crop"], 64);
+}
+
+#[test]
+fn shards_merge_into_the_unsharded_store_and_bad_merges_are_refused() {
+    let setup = Setup::new();
+    assert_ok(&setup.collect("whole", &["--policy", "oracle"]));
+    for i in 1..=3 {
+        let shard = format!("{i}/3");
+        assert_ok(&setup.collect(
+            &format!("shard{i}"),
+            &["--policy", "oracle", "--shard", &shard],
+        ));
+    }
+    let shard = |i: u32| {
+        setup
+            .path(&format!("shard{i}"))
+            .to_str()
+            .unwrap()
+            .to_owned()
+    };
+    let merge = |inputs: &[String], out: &str, extra: &[&str]| {
+        let out = setup.path(out).to_str().unwrap().to_owned();
+        let mut args: Vec<&str> = vec!["merge", "--out", &out];
+        args.extend(inputs.iter().map(String::as_str));
+        args.extend_from_slice(extra);
+        graspmap(&args)
+    };
+    assert_ok(&merge(&[shard(2), shard(1), shard(3)], "merged", &[]));
+    assert_eq!(
+        store_bytes(&setup.path("whole")),
+        store_bytes(&setup.path("merged"))
+    );
+
+    // Missing, overlapping, and another run's shards are refused, naming what is wrong.
+    assert_user_error(
+        &merge(&[shard(1), shard(3)], "m1", &[]),
+        &["2/3", "missing", "--allow-partial"],
+    );
+    assert_user_error(
+        &merge(&[shard(1), shard(1)], "m2", &[]),
+        &["shard1", "1/3", "overlap"],
+    );
+    assert_ok(&setup.collect(
+        "other2",
+        &["--policy", "oracle", "--shard", "2/3", "--seed", "9"],
+    ));
+    let other = setup.path("other2").to_str().unwrap().to_owned();
+    assert_user_error(
+        &merge(&[shard(1), other, shard(3)], "m3", &[]),
+        &["other2", "other settings", "seed"],
+    );
+    // Another checkpoint is another run too (the model's hash is in the settings).
+    assert_ok(&setup.collect("model1", &["--shard", "1/2", "--max-attempts", "1"]));
+    std::fs::copy(
+        setup.path("affordance/best.safetensors"),
+        setup.path("copy.safetensors"),
+    )
+    .unwrap();
+    {
+        // Different weights: one value changed.
+        let mut bytes = std::fs::read(setup.path("copy.safetensors")).unwrap();
+        let last = bytes.len() - 1;
+        bytes[last] ^= 1;
+        std::fs::write(setup.path("copy.safetensors"), bytes).unwrap();
+    }
+    let copy = setup.path("copy.safetensors").to_str().unwrap().to_owned();
+    assert_ok(&setup.collect(
+        "model2",
+        &[
+            "--shard",
+            "2/2",
+            "--max-attempts",
+            "1",
+            "--checkpoint",
+            &copy,
+        ],
+    ));
+    let (m1, m2) = (
+        setup.path("model1").to_str().unwrap().to_owned(),
+        setup.path("model2").to_str().unwrap().to_owned(),
+    );
+    assert_user_error(&merge(&[m1, m2], "m4", &[]), &["model2", "checkpoint"]);
+    // A corrupt shard is named.
+    std::fs::write(setup.path("shard3/scene_000002/trials.json"), b"{").unwrap();
+    assert_user_error(
+        &merge(&[shard(1), shard(2), shard(3)], "m5", &[]),
+        &["shard3", "scene_000002"],
+    );
+    // --allow-partial writes what is there and says so.
+    assert_ok(&merge(
+        &[shard(1), shard(2)],
+        "partial",
+        &["--allow-partial"],
+    ));
+    let settings = read_json(&setup.path("partial/collect.json"));
+    assert_eq!(
+        settings["missing_shards"],
+        serde_json::json!([{"index": 3, "count": 3}])
+    );
+    // The merge never replaces a store.
+    assert_user_error(
+        &merge(&[shard(1), shard(2)], "partial", &["--allow-partial"]),
+        &["partial", "not empty"],
+    );
+}
+
+#[test]
+fn a_killed_collection_resumes_to_the_same_bytes() {
+    let setup = Setup::new();
+    assert_ok(&setup.collect("whole", &["--policy", "oracle"]));
+    let args = setup.args("killed", "2", &["--policy", "oracle"]);
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_graspmap"))
+        .args(&args)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Kill it once its first attempt is on disk, as a lost node or `kill -9` would.
+    let first = setup.path("killed/scene_000000/trials.json");
+    let deadline = std::time::Instant::now() + std::time::Duration::from_secs(60);
+    while !first.exists() && std::time::Instant::now() < deadline {
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    send_signal(&child, libc::SIGKILL);
+    child.wait().unwrap();
+    assert!(first.exists(), "the first attempt never landed");
+    assert_ne!(
+        store_bytes(&setup.path("whole")),
+        store_bytes(&setup.path("killed")),
+        "killed too late to test resuming"
+    );
+    let out = setup.collect("killed", &["--policy", "oracle"]);
+    assert_ok(&out);
+    assert_eq!(
+        store_bytes(&setup.path("whole")),
+        store_bytes(&setup.path("killed"))
+    );
+}
