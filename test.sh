@@ -3,10 +3,11 @@
 # tests simulate full pick attempts, which a debug build runs far slower. libtorch (for tch) is
 # installed into .venv/ first, and the system packages the tests call with apt-get when they are
 # missing and we are root: ffmpeg (ffprobe checks the MP4 videos), chromium and chromium-driver
-# (the browser test drives the labelling page through WebDriver). Both are no-ops once they are
+# (the browser test drives the labelling page through WebDriver), slurm-wlm and munge. All are no-ops once they are
 # there; without root the tests that need a package fail with the command that installs it.
+# slurm-wlm and munge give tests/suite/slurm.rs a real one-node Slurm (scripts/slurm/).
 set -euo pipefail
 cd "$(dirname "$0")"
 scripts/setup-libtorch.sh
-scripts/setup-system.sh ffmpeg chromium chromium-driver
+scripts/setup-system.sh ffmpeg chromium chromium-driver slurm-wlm munge
 cargo test --release --locked "$@"

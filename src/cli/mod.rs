@@ -299,6 +299,11 @@ pub(crate) struct EvalArgs {
     /// report violations per attempt; slower, for scripts/soak.sh.
     #[arg(long, hide = true)]
     pub(crate) check_invariants: bool,
+    /// Run only part of --seeds: the i-th seed given (from 0) belongs to shard i mod N + 1.
+    /// Its report (kept as DATA/reports/eval_<task>_<policy>_shard<I>of<N>.json) says which
+    /// part; `graspmap merge` joins the shards' reports into the whole sweep's.
+    #[arg(long, value_name = "I/N", value_parser = parse_shard, conflicts_with = "record")]
+    pub(crate) shard: Option<Shard>,
 }
 
 /// `graspmap collect`.

@@ -104,6 +104,7 @@ impl EvalArgs {
             record: self.record,
             resume: self.resume,
             check_invariants: self.check_invariants,
+            shard: self.shard.unwrap_or(Shard::WHOLE),
         })
     }
 }

@@ -232,6 +232,7 @@ fn evaluate(
         record: None,
         resume: false,
         check_invariants: false,
+        shard: crate::data::trials::Shard::WHOLE,
     };
     super::eval::run(&eval_context, config)?;
     let text = std::fs::read_to_string(&report)

@@ -1,5 +1,7 @@
-//! `graspmap merge`: shard trial stores into one store, equal byte for byte to the store one
-//! unsharded `collect` writes (docs/data.md, "Trials").
+//! `graspmap merge`: the shards of one sweep into one result. Trial stores (folders) merge into
+//! one store, equal byte for byte to the unsharded `collect`'s (docs/data.md, "Trials"); eval
+//! reports (files) merge into one report, equal to the unsharded `eval`'s attempt for attempt,
+//! with its summary recomputed over all scenes (docs/cluster.md).
 
 use std::path::{Path, PathBuf};
 
@@ -21,8 +23,260 @@ pub(crate) struct MergeConfig {
     pub(crate) allow_partial: bool,
 }
 
-/// Runs the command.
+/// Runs the command: eval reports when the inputs are files, trial stores when they are
+/// folders.
 pub(crate) fn run(context: &Context, config: MergeConfig) -> anyhow::Result<()> {
+    let files = config.inputs.iter().filter(|p| p.is_file()).count();
+    if files == config.inputs.len() {
+        return merge_reports(context, &config);
+    }
+    if let Some(missing) = config.inputs.iter().find(|p| !p.exists()) {
+        bail!(
+            "{}: not found; give the shards' eval reports (files) or trial stores (folders)",
+            missing.display()
+        );
+    }
+    if files > 0 {
+        bail!(
+            "merge takes either eval reports (files) or trial stores (folders), not both; {} is a file and {} a folder",
+            config.inputs.iter().find(|p| p.is_file()).expect("counted").display(),
+            config.inputs.iter().find(|p| p.is_dir()).expect("counted").display()
+        );
+    }
+    merge_stores(context, &config)
+}
+
+/// One shard's eval report, read and checked.
+struct ShardReport {
+    path: PathBuf,
+    value: serde_json::Value,
+    shard: Shard,
+}
+
+/// What must agree between the shards of one sweep: the configuration without the parts that
+/// are allowed to differ per shard (its number, where its report went, threads, quiet).
+fn sweep_identity(config: &serde_json::Value) -> serde_json::Value {
+    let mut identity = config.clone();
+    if let Some(map) = identity.as_object_mut() {
+        map.remove("shard");
+        if let Some(global) = map.get_mut("global").and_then(|g| g.as_object_mut()) {
+            for key in ["json", "threads", "quiet"] {
+                global.remove(key);
+            }
+        }
+    }
+    identity
+}
+
+/// Reads every eval report, refusing what would not make the unsharded sweep's report.
+fn read_reports(inputs: &[PathBuf]) -> anyhow::Result<Vec<ShardReport>> {
+    let mut shards: Vec<ShardReport> = Vec::new();
+    for path in inputs {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let value: serde_json::Value = serde_json::from_str(&text).with_context(|| {
+            format!(
+                "{} is not a graspmap eval report (it does not parse as JSON; rerun that shard)",
+                path.display()
+            )
+        })?;
+        if value["schema"] != "graspmap.eval/2" {
+            bail!(
+                "{} is not a graspmap eval report (schema {}, expected graspmap.eval/2; rerun that shard)",
+                path.display(),
+                value["schema"]
+            );
+        }
+        let Some(shard) = value["config"]["shard"].as_str() else {
+            bail!(
+                "{} is a whole sweep, not a shard; merge joins the reports of `eval --shard I/N`",
+                path.display()
+            );
+        };
+        let shard = Shard::parse(shard).map_err(|e| {
+            anyhow::anyhow!("{}: config.shard {e}; rerun that shard", path.display())
+        })?;
+        if value["results"]["interrupted"] == true {
+            bail!(
+                "{} (shard {shard}) is unfinished: it was interrupted; finish it with its eval command and --resume",
+                path.display()
+            );
+        }
+        let commit = value["git_commit"].as_str().unwrap_or_default();
+        let ours = env!("GRASPMAP_GIT_COMMIT");
+        if commit != ours {
+            bail!(
+                "{} was written by graspmap at commit {commit}, and this merge is commit {ours}; run the shards and the merge with one build",
+                path.display()
+            );
+        }
+        if let Some(first) = shards.first() {
+            let (a, b) = (&first.value["config"], &value["config"]);
+            if a["checkpoint_sha256"] != b["checkpoint_sha256"] {
+                bail!(
+                    "{} was evaluated with another checkpoint than {} (SHA-256 {} against {}); merge only the shards of one sweep",
+                    path.display(),
+                    first.path.display(),
+                    b["checkpoint_sha256"],
+                    a["checkpoint_sha256"]
+                );
+            }
+            if a["objects"] != b["objects"]
+                || a["global"]["objects_dir"] != b["global"]["objects_dir"]
+            {
+                bail!(
+                    "{} was evaluated on another object set than {}; merge only the shards of one sweep",
+                    path.display(),
+                    first.path.display()
+                );
+            }
+            if sweep_identity(a) != sweep_identity(b) {
+                bail!(
+                    "{} was run with another configuration than {} ({}differ); merge only the shards of one sweep",
+                    path.display(),
+                    first.path.display(),
+                    differing(&sweep_identity(a), &sweep_identity(b))
+                );
+            }
+            if first.shard.count != shard.count {
+                bail!(
+                    "{} is shard {shard}, and {} is shard {}: the shard counts differ; merge only the shards of one sweep",
+                    path.display(),
+                    first.path.display(),
+                    first.shard
+                );
+            }
+        }
+        if let Some(twin) = shards.iter().find(|s| s.shard == shard) {
+            bail!(
+                "{} and {} both hold shard {shard}: the shards overlap; give each shard once",
+                twin.path.display(),
+                path.display()
+            );
+        }
+        shards.push(ShardReport {
+            path: path.clone(),
+            value,
+            shard,
+        });
+    }
+    if shards.is_empty() {
+        bail!("merge needs at least one shard report (the --json files of `eval --shard I/N`)");
+    }
+    Ok(shards)
+}
+
+/// Joins eval shard reports into the whole sweep's report.
+fn merge_reports(context: &Context, config: &MergeConfig) -> anyhow::Result<()> {
+    use crate::present::eval_report::{report_lines, summarise, SceneRun, Task};
+    let shards = read_reports(&config.inputs)?;
+    let first = &shards[0];
+    let count = first.shard.count;
+    let sweep: Vec<u64> = serde_json::from_value(first.value["config"]["seeds"].clone())
+        .with_context(|| format!("{}: config.seeds is not a seed list", first.path.display()))?;
+    let missing: Vec<Shard> = (1..=count)
+        .map(|index| Shard { index, count })
+        .filter(|s| !shards.iter().any(|given| given.shard == *s))
+        .collect();
+    if !missing.is_empty() && !config.allow_partial {
+        let names: Vec<String> = missing.iter().map(Shard::to_string).collect();
+        bail!(
+            "shards {} of {count} are missing (run them with eval --shard I/{count}, or pass --allow-partial to merge what is there)",
+            names.join(", ")
+        );
+    }
+    crate::data::output::check_output_file(&config.out, "--out")?;
+    let mut runs: Vec<SceneRun> = Vec::new();
+    let mut total_wall = 0.0;
+    for shard in &shards {
+        let expected: Vec<u64> = sweep
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| shard.shard.holds(*i as u64))
+            .map(|(_, &s)| s)
+            .collect();
+        let mine: Vec<SceneRun> = serde_json::from_value(shard.value["results"]["runs"].clone())
+            .with_context(|| {
+                format!(
+                    "{}: results.runs is not a list of scenes (rerun that shard)",
+                    shard.path.display()
+                )
+            })?;
+        let seeds: Vec<u64> = mine.iter().map(|r| r.seed).collect();
+        if seeds != expected {
+            bail!(
+                "{} (shard {}) holds seeds {:?}, and shard {} of --seeds holds {:?}; rerun that shard",
+                shard.path.display(),
+                shard.shard,
+                seeds,
+                shard.shard,
+                expected
+            );
+        }
+        total_wall += shard.value["results"]["timing"]["total_wall"]
+            .as_f64()
+            .unwrap_or(0.0);
+        runs.extend(mine);
+    }
+    runs.sort_by_key(|r| sweep.iter().position(|&s| s == r.seed));
+    let config_value = &first.value["config"];
+    let task: Task = serde_json::from_value(config_value["task"].clone())
+        .with_context(|| format!("{}: config.task", first.path.display()))?;
+    let policy: crate::policy::PolicyKind = serde_json::from_value(config_value["policy"].clone())
+        .with_context(|| format!("{}: config.policy", first.path.display()))?;
+    let names: Vec<String> = serde_json::from_value(config_value["objects"].clone())
+        .with_context(|| format!("{}: config.objects", first.path.display()))?;
+    let seeds: Vec<u64> = runs.iter().map(|r| r.seed).collect();
+    let mut results = summarise(task, policy, seeds, &names, runs, total_wall, false);
+    results.vis_dir = serde_json::from_value(first.value["results"]["vis_dir"].clone())
+        .ok()
+        .flatten();
+    let mut merged_config = config_value.clone();
+    merged_config["global"]["json"] = serde_json::Value::from(config.out.display().to_string());
+    if let Some(map) = merged_config.as_object_mut() {
+        map.remove("shard");
+        if !missing.is_empty() {
+            map.insert(
+                "missing_shards".to_owned(),
+                serde_json::json!(missing.iter().map(Shard::to_string).collect::<Vec<_>>()),
+            );
+        }
+    }
+    let remember = config_value["suppression"]["remember"]
+        .as_u64()
+        .unwrap_or(0) as usize;
+    for line in report_lines(&results, remember) {
+        context.say(&line);
+    }
+    crate::present::envelope::write_versioned_report(
+        &config.out,
+        "eval",
+        2,
+        sweep[0],
+        &merged_config,
+        &results,
+    )?;
+    context.say(&format!(
+        "merged {} of {count} into {}{}",
+        counted(shards.len(), "shard"),
+        config.out.display(),
+        match missing.is_empty() {
+            true => String::new(),
+            false => format!(
+                " (partial: shards {} missing)",
+                missing
+                    .iter()
+                    .map(Shard::to_string)
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        }
+    ));
+    Ok(())
+}
+
+/// Joins shard trial stores into one store.
+fn merge_stores(context: &Context, config: &MergeConfig) -> anyhow::Result<()> {
     let shards = read_shards(&config.inputs)?;
     let first = &shards[0];
     let count = first.shard.count;

@@ -353,3 +353,111 @@ fn a_killed_collection_resumes_to_the_same_bytes() {
         store_bytes(&setup.path("killed"))
     );
 }
+
+/// An eval report's attempts and summary without timings, and its configuration without where
+/// its JSON went and the thread count.
+fn eval_comparable(report: &serde_json::Value) -> serde_json::Value {
+    let mut report = report.clone();
+    report["results"]["timing"] = serde_json::Value::Null;
+    for run in report["results"]["runs"].as_array_mut().unwrap() {
+        for attempt in run["attempts"].as_array_mut().unwrap() {
+            attempt["timing"] = serde_json::Value::Null;
+        }
+    }
+    report["config"]["global"]["json"] = serde_json::Value::Null;
+    report
+}
+
+#[test]
+fn eval_shards_merge_into_the_unsharded_report_and_bad_merges_are_refused() {
+    let setup = crate::eval::Setup::new();
+    let eval = |json: &str, extra: &[&str]| {
+        let json = setup.path(json);
+        let mut args = vec![
+            "eval",
+            "--task",
+            "train",
+            "--seeds",
+            "0,7,100",
+            "--json",
+            json.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        setup.run(&args)
+    };
+    assert_ok(&eval("whole.json", &[]));
+    assert_ok(&eval("s1.json", &["--shard", "1/2"]));
+    assert_ok(&eval("s2.json", &["--shard", "2/2"]));
+    let s1 = read_json(&setup.path("s1.json"));
+    assert_eq!(s1["config"]["shard"], "1/2");
+    assert_eq!(s1["results"]["seeds"], serde_json::json!([0, 100]));
+    let path = |name: &str| setup.path(name).to_str().unwrap().to_owned();
+    let merge = |inputs: &[&str], out: &str, extra: &[&str]| {
+        let out = path(out);
+        let mut args: Vec<String> = vec!["merge".into(), "--out".into(), out];
+        args.extend(inputs.iter().map(|i| path(i)));
+        args.extend(extra.iter().map(|s| s.to_string()));
+        graspmap(&args.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let out = merge(&["s2.json", "s1.json"], "merged.json", &[]);
+    assert_ok(&out);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("success rate"));
+    let merged = read_json(&setup.path("merged.json"));
+    let whole = read_json(&setup.path("whole.json"));
+    assert_eq!(eval_comparable(&merged), eval_comparable(&whole));
+
+    // Missing and overlapping shards.
+    assert_user_error(
+        &merge(&["s1.json"], "m1.json", &[]),
+        &["2/2", "missing", "--allow-partial"],
+    );
+    assert_user_error(
+        &merge(&["s1.json", "s1.json"], "m2.json", &[]),
+        &["s1.json", "1/2", "overlap"],
+    );
+    // Another commit.
+    let mut other = read_json(&setup.path("s2.json"));
+    other["git_commit"] = "0123456789ab".into();
+    std::fs::write(setup.path("commit.json"), other.to_string()).unwrap();
+    assert_user_error(
+        &merge(&["s1.json", "commit.json"], "m3.json", &[]),
+        &["commit.json", "commit 0123456789ab"],
+    );
+    // Another checkpoint: the same shard run with other weights.
+    let mut bytes = std::fs::read(setup.path("affordance/best.safetensors")).unwrap();
+    let last = bytes.len() - 1;
+    bytes[last] ^= 1;
+    std::fs::write(setup.path("other.safetensors"), bytes).unwrap();
+    assert_ok(&eval(
+        "c2.json",
+        &["--shard", "2/2", "--checkpoint", &path("other.safetensors")],
+    ));
+    assert_user_error(
+        &merge(&["s1.json", "c2.json"], "m4.json", &[]),
+        &["c2.json", "another checkpoint"],
+    );
+    // Another configuration.
+    assert_ok(&eval(
+        "n2.json",
+        &["--shard", "2/2", "--n-past-action", "3"],
+    ));
+    assert_user_error(
+        &merge(&["s1.json", "n2.json"], "m5.json", &[]),
+        &["n2.json", "another configuration", "suppression"],
+    );
+    // A corrupt file.
+    let text = std::fs::read_to_string(setup.path("s2.json")).unwrap();
+    std::fs::write(setup.path("torn.json"), &text[..text.len() / 2]).unwrap();
+    assert_user_error(
+        &merge(&["s1.json", "torn.json"], "m6.json", &[]),
+        &["torn.json", "does not parse"],
+    );
+    // --allow-partial writes what is there, marked.
+    assert_ok(&merge(&["s1.json"], "partial.json", &["--allow-partial"]));
+    let partial = read_json(&setup.path("partial.json"));
+    assert_eq!(
+        partial["config"]["missing_shards"],
+        serde_json::json!(["2/2"])
+    );
+    assert_eq!(partial["results"]["seeds"], serde_json::json!([0, 100]));
+}

@@ -19,6 +19,7 @@ mod libtorch;
 mod physics;
 mod place;
 mod report;
+mod slurm;
 mod train;
 mod video;
 mod web;

@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use crate::data::trials::Shard;
 use crate::model::unet::Precision;
 use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;
@@ -41,4 +42,19 @@ pub(crate) struct EvalConfig {
     pub(crate) resume: bool,
     /// Check the physics invariants after every step (the soak test).
     pub(crate) check_invariants: bool,
+    /// The part of `seeds` this run evaluates: seed number i (0-based, in the order given)
+    /// belongs to shard i mod N + 1.
+    pub(crate) shard: Shard,
+}
+
+impl EvalConfig {
+    /// The seeds this run evaluates: all of them, or its shard's.
+    pub(crate) fn run_seeds(&self) -> Vec<u64> {
+        self.seeds
+            .iter()
+            .enumerate()
+            .filter(|(i, _)| self.shard.holds(*i as u64))
+            .map(|(_, &seed)| seed)
+            .collect()
+    }
 }

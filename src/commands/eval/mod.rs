@@ -36,8 +36,9 @@ use crate::sim::{ObjectLocation, Workcell, WorkcellConfig};
 pub(crate) use config::{
     EvalConfig, ATTEMPTS_PER_OBJECT, EPISODE_EVERY_STEPS, SINGLE_OBJECT_SEED_OFFSET,
 };
-pub(crate) use sweep::kept_report_path;
-use sweep::{announce_plan, finished_runs, keep_interrupted, resolved_config, resume_source};
+use sweep::{
+    announce_plan, finished_runs, keep_interrupted, kept_path, resolved_config, resume_source,
+};
 
 /// Settings shared by every scene of one evaluation.
 struct Evaluation<'a> {
@@ -57,7 +58,15 @@ struct Evaluation<'a> {
 /// Runs the command.
 pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
     let start = Instant::now();
-    let seeds = config.seeds.clone();
+    let seeds = config.run_seeds();
+    if seeds.is_empty() {
+        anyhow::bail!(
+            "--shard {} holds none of the {} of --seeds; give at most {} shards",
+            config.shard,
+            counted(config.seeds.len(), "seed"),
+            config.seeds.len()
+        );
+    }
     crate::model::use_threads(context.threads);
     let policy = policy(&config)?;
     let split = context.split()?;
@@ -72,7 +81,7 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         Task::Test => "eval_pick_testing_vis",
         Task::EmptyBin => "eval_empty_bin_vis",
     });
-    let kept = kept_report_path(&context.data, config.task, config.policy);
+    let kept = kept_path(&context.data, &config);
     check_output_dir(kept.parent().unwrap_or(&context.data), "the reports folder")?;
     check_output_dir(&vis_dir, "the visualisations folder")?;
     if let Some(record) = &config.record {
@@ -89,7 +98,8 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         suppression: config.suppression,
         workcell: WorkcellConfig::default(),
         vis_dir,
-        per_seed_vis: seeds.len() > 1,
+        // By the whole sweep, so that shards write where the unsharded run would.
+        per_seed_vis: config.seeds.len() > 1,
         max_attempts: config.max_attempts,
         recording: config.record.as_ref().map(|_| Vec::new()),
         bar: context.progress_bar("attempts", per_scene * seeds.len() as u64, 0),
@@ -151,7 +161,7 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
 }
 
 /// Summarises a finished evaluation, prints it, and writes its report to --json and to
-/// [`kept_report_path`].
+/// the kept report path.
 fn finish(
     context: &Context,
     config: &EvalConfig,
@@ -167,7 +177,7 @@ fn finish(
     let mut results = summarise(
         config.task,
         config.policy,
-        config.seeds.clone(),
+        config.run_seeds(),
         names,
         runs,
         start.elapsed().as_secs_f64(),
@@ -181,7 +191,7 @@ fn finish(
     let resolved = resolved_config(context, config, names);
     // The latest finished run of each task and policy stays under DATA, beside the model, for
     // `graspmap report`; --json is the user's own copy, wherever it goes.
-    let kept = kept_report_path(&context.data, config.task, config.policy);
+    let kept = kept_path(&context.data, config);
     let targets = context.json.iter().chain(std::iter::once(&kept));
     for target in targets {
         write_versioned_report(target, "eval", 2, config.seeds[0], &resolved, &results)?;

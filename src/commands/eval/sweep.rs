@@ -20,6 +20,22 @@ pub(crate) fn kept_report_path(data: &Path, task: Task, policy: PolicyKind) -> P
         .join(format!("eval_{}_{}.json", task.name(), policy.name()))
 }
 
+/// Where this run keeps its report: [`kept_report_path`], or for a shard, beside it with
+/// `_shard<I>of<N>` before `.json`, so shards sharing a data folder keep one each.
+pub(super) fn kept_path(data: &Path, config: &EvalConfig) -> PathBuf {
+    let whole = kept_report_path(data, config.task, config.policy);
+    if config.shard.is_whole() {
+        return whole;
+    }
+    whole.with_file_name(format!(
+        "eval_{}_{}_shard{}of{}.json",
+        config.task.name(),
+        config.policy.name(),
+        config.shard.index,
+        config.shard.count
+    ))
+}
+
 /// Writes the report of an interrupted sweep (the scenes finished so far) and says how to
 /// continue; returns the error that ends the command with the signal's status.
 pub(super) fn keep_interrupted(
@@ -30,7 +46,7 @@ pub(super) fn keep_interrupted(
     elapsed: f64,
     interrupted: interrupt::Interrupted,
 ) -> anyhow::Error {
-    let seeds = &config.seeds;
+    let seeds = &config.run_seeds();
     let written = (|| -> anyhow::Result<()> {
         let kept = format!("{} of {} scenes", runs.len(), seeds.len());
         let results = summarise(
@@ -45,10 +61,10 @@ pub(super) fn keep_interrupted(
         // The finished scenes always stay under DATA/reports, where `--resume` finds them, and
         // in the user's own --json copy when there is one.
         let resolved = resolved_config(context, config, names);
-        let kept_path = kept_report_path(&context.data, config.task, config.policy);
+        let kept_path = kept_path(&context.data, config);
         let own = context.json.as_ref().filter(|j| *j != Path::new("-"));
         for target in own.into_iter().chain(std::iter::once(&kept_path)) {
-            write_versioned_report(target, "eval", 2, seeds[0], &resolved, &results)?;
+            write_versioned_report(target, "eval", 2, config.seeds[0], &resolved, &results)?;
         }
         let place = own.unwrap_or(&kept_path);
         context.say(&format!(
@@ -138,20 +154,23 @@ pub(super) fn finished_runs(report: &Path, config: &EvalConfig) -> anyhow::Resul
     }
     let runs: Vec<SceneRun> =
         serde_json::from_value(value["results"]["runs"].clone()).with_context(bad)?;
+    let mine = config.run_seeds();
     Ok(runs
         .into_iter()
-        .filter(|r| config.seeds.contains(&r.seed))
+        .filter(|r| mine.contains(&r.seed))
         .collect())
 }
 
-/// The configuration as the report records it.
+/// The configuration as the report records it. `seeds` are the whole sweep's; a shard's report
+/// adds `shard` ("I/N"), and its `results.seeds` are the shard's. A model's checkpoint is named
+/// by path and by SHA-256, which `merge` compares.
 pub(super) fn resolved_config(
     context: &Context,
     config: &EvalConfig,
     names: &[String],
 ) -> serde_json::Value {
     let model = config.policy == PolicyKind::Model;
-    serde_json::json!({
+    let mut resolved = serde_json::json!({
         "global": context,
         "task": config.task,
         "policy": config.policy,
@@ -169,5 +188,13 @@ pub(super) fn resolved_config(
         "objects": names,
         "workcell": WorkcellConfig::default(),
         "record": config.record,
-    })
+    });
+    if model {
+        resolved["checkpoint_sha256"] = crate::model::checkpoint::file_sha256(&config.checkpoint)
+            .map_or(serde_json::Value::Null, serde_json::Value::from);
+    }
+    if !config.shard.is_whole() {
+        resolved["shard"] = serde_json::Value::from(config.shard.to_string());
+    }
+    resolved
 }
