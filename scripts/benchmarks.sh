@@ -25,13 +25,16 @@ self=$(realpath "$0")
 cd "$(dirname "$self")/.."
 root=$(pwd)
 
-tables=(pipeline training pytorch latency workcell quality yardstick sweep placing collision
+tables=(pipeline training crop trials slurm pytorch latency workcell quality yardstick sweep placing collision
   verification centring suppression variants labelling soak faults tests webpage video)
 
 describe() {
   case $1 in
     pipeline) echo "./demo.sh's steps timed one by one, against the Python reference" ;;
     training) echo "train --epochs 30 in fp32 and bf16: wall, seconds per epoch, images/s, best loss" ;;
+    crop) echo "train --crop 64 against --crop 0 on the labels: wall, loss, train, test and empty_bin" ;;
+    trials) echo "improve (collect + retrain rounds) from the labelled model, every round evaluated, vetoes on and off" ;;
+    slurm) echo "a 2-shard empty_bin sweep on the one-node Slurm against one process (needs root, slurm-wlm, munge)" ;;
     pytorch) echo "graspmap bench train in bf16 and fp32: Rust against the PyTorch peer" ;;
     latency) echo "an eval attempt's wall time split into sim, render and network" ;;
     workcell) echo "cargo bench --bench workcell and one whole grasp process" ;;
@@ -84,14 +87,16 @@ done
 # Settings: the full run repeats BENCHMARKS.md's commands; --quick shrinks every count.
 if ((quick)); then
   EPOCHS=1 PER_OBJECT=2 TEST_SEEDS=0 HELD_TEST=3000 EMPTY_SEEDS=1 HELD_EMPTY=11 MAX_ATTEMPTS=2
+  ROUNDS=1 SCENES=2 ROUND_EPOCHS=1 SLURM_SEEDS=1-2
   BENCH_STEPS=2 BENCH_ROUNDS=1 SWEEP_SEEDS=1 SOAK_RANDOM=2 SOAK_MODEL=1 FUZZ_SCALE=0.01 KILLS=1
   VARIANT_LIST="rgb:1:2 rgbd:3:2"
 else
   EPOCHS=30 PER_OBJECT=12 TEST_SEEDS=0,1000,2000 HELD_TEST=3000,4000,5000 EMPTY_SEEDS=1-10
   HELD_EMPTY=11-20 MAX_ATTEMPTS=25 BENCH_STEPS=20 BENCH_ROUNDS=2 SWEEP_SEEDS="1 2 3"
   SOAK_RANDOM=200 SOAK_MODEL=20 FUZZ_SCALE=1 KILLS=10 VARIANT_LIST="rgb:1 rgbd:1 rgb:3 rgbd:3 rgbd:3:24"
+  ROUNDS=${ROUNDS:-2} SCENES=100 ROUND_EPOCHS=10 SLURM_SEEDS=1-10
 fi
-export EPOCHS PER_OBJECT TEST_SEEDS HELD_TEST EMPTY_SEEDS HELD_EMPTY MAX_ATTEMPTS
+export EPOCHS PER_OBJECT TEST_SEEDS HELD_TEST EMPTY_SEEDS HELD_EMPTY MAX_ATTEMPTS ROUNDS SCENES ROUND_EPOCHS SLURM_SEEDS
 
 out=$(realpath -m "${OUT:-target/benchmarks}")
 mkdir -p "$out/eval" "$out/logs"
@@ -280,6 +285,82 @@ t_training() {
     "$bin" --data "$d/$precision" --quiet --json "$d/$precision/train.json" train --epochs "$EPOCHS" \
       --precision "$precision" >"$d/$precision/train.log" 2>&1
   done
+}
+
+t_crop() {
+  local d=$out/crop crop spec
+  rm -rf "$d"
+  ensure_labels
+  for crop in 0 64; do
+    mkdir -p "$d/$crop"
+    cp -r "$labels_dir" "$d/$crop/labels"
+    log "crop: train --epochs $EPOCHS --crop $crop"
+    "$bin" --data "$d/$crop" --quiet --json "$d/$crop/train.json" train --epochs "$EPOCHS" \
+      --crop "$crop" >"$d/$crop/train.log" 2>&1
+    for spec in train test enp8; do
+      spec_args "$spec"
+      eval_into "$d/$crop/$spec.json" "$d/$crop" "${spec[@]}"
+    done
+  done
+}
+
+# The loop from the default model (labels and crops), then every round's model and the start
+# model on train, test and empty_bin (held-out seeds too), with the vetoes and as the plain
+# argmax; the oracle with memory beside them.
+t_trials() {
+  local d=$out/trials spec tag ck
+  ensure_model
+  if ! [[ -f $d/run && $(cat "$d/run") == "$run_id" ]]; then
+    rm -rf "$d"
+    mkdir -p "$d/data/affordance"
+    cp -r "$model_dir/labels" "$d/data/labels"
+    cp "$model_dir"/affordance/best.* "$d/data/affordance/"
+    log "trials: improve --rounds $ROUNDS --scenes $SCENES --epochs $ROUND_EPOCHS"
+    timed "$d/improve.time.json" "$bin" --data "$d/data" --quiet --json "$d/improve.json" improve \
+      --rounds "$ROUNDS" --scenes "$SCENES" --epochs "$ROUND_EPOCHS" >"$d/improve.log" 2>&1
+    echo "$run_id" >"$d/run"
+  fi
+  for tag in start $(seq -f 'round_%02g' 1 "$ROUNDS"); do
+    if [[ $tag == start ]]; then ck=$d/data/affordance/best.safetensors; else ck=$d/data/improve/$tag/model/best.safetensors; fi
+    for spec in train test htest enp8 henp8; do
+      spec_args "$spec"
+      eval_into "$d/eval/$tag-$spec.json" "$d/data" --checkpoint "$ck" "${spec[@]}"
+      eval_into "$d/eval/$tag-$spec-argmax.json" "$d/data" --checkpoint "$ck" "${spec[@]}" \
+        --verify-top 0 --collision-check off
+    done
+  done
+  ev oracle enp8
+  ev oracle henp8
+}
+
+t_slurm() {
+  local d=$out/slurm conf
+  rm -rf "$d"
+  mkdir -p "$d/data"
+  conf=$(scripts/slurm/local-cluster.sh start "$d/cluster") || die "the one-node Slurm did not start (needs root, slurm-wlm and munge)"
+  local sweep=(eval --task empty_bin --policy oracle --seeds "$SLURM_SEEDS" --n-past-action 8 --max-attempts "$MAX_ATTEMPTS")
+  log "slurm: ${sweep[*]} in one process, then in 2 shards under Slurm"
+  timed "$d/single.time.json" "$bin" --data "$d/data" --quiet --threads 2 --json "$d/single.json" "${sweep[@]}" >"$d/single.log" 2>&1
+  python3 - "$d" "$conf" "$bin" "${sweep[@]}" <<'PY'
+import json, os, subprocess, sys, time
+d, conf, binary, sweep = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
+env = dict(os.environ, SLURM_CONF=conf, RUN_DIR=f"{d}/run", DATA=f"{d}/data", SHARDS="2",
+           CPUS_PER_TASK="1", MEM_PER_TASK="2G", GRASPMAP=binary)
+start = time.monotonic()
+subprocess.run(["scripts/slurm/submit.sh", *sweep], env=env, check=True, stdout=subprocess.DEVNULL)
+jobs = dict(l.split("=", 1) for l in open(f"{d}/run/jobs.env").read().split())
+while True:
+    out = subprocess.run(["scontrol", "show", "job", jobs["MERGE_JOB"], "--oneliner"], env=env,
+                         capture_output=True, text=True).stdout
+    state = next((f.split("=", 1)[1] for f in out.split() if f.startswith("JobState=")), "UNKNOWN")
+    if state not in ("PENDING", "RUNNING", "CONFIGURING", "COMPLETING"):
+        break
+    time.sleep(0.2)
+wall = time.monotonic() - start
+shards = [json.load(open(f"{d}/run/shard_{i}.json"))["results"]["timing"]["total_wall"] for i in (1, 2)]
+json.dump({"state": state, "wall_s": wall, "shard_walls": shards}, open(f"{d}/slurm.time.json", "w"))
+PY
+  scripts/slurm/local-cluster.sh stop "$d/cluster"
 }
 
 # Labels for the training table: the model's when it was labelled in this run, else label anew.
@@ -835,6 +916,61 @@ def t_collision():
                      moved(g("enp8"), span=False, lost=False)])
     md(["setting", "train, seed 0", f"test, {seeds(E['TEST_SEEDS'])}", f"empty_bin, {seeds(E['EMPTY_SEEDS'])}",
         f"empty_bin, {seeds(E['EMPTY_SEEDS'])}, np8"], rows)
+
+
+def t_crop():
+    d = f"{out}/crop"
+    head("Crop training", f"`graspmap train --epochs {E['EPOCHS']} --crop 0|64` on a copy of the labels, then `eval`.")
+    rows = []
+    for crop in ("0", "64"):
+        r = load(f"{d}/{crop}/train.json")
+        g = lambda s: ev(s, f"{d}/{crop}")
+        rows.append([f"`--crop {crop}`", DASH if r is None else f"{r['wall_seconds']:.1f} s",
+                     DASH if r is None else f"{r['best_val_loss']:.5f}", count(g("train")), rate(g("test")),
+                     moved(g("enp8"))])
+    md(["training", "wall", "best validation loss", "train, seed 0", f"test, {seeds(E['TEST_SEEDS'])}",
+        f"empty_bin, {seeds(E['EMPTY_SEEDS'])}, np8"], rows)
+
+
+def t_trials():
+    d = f"{out}/trials"
+    head("Learning from trials", f"`graspmap improve --rounds {E['ROUNDS']} --scenes {E['SCENES']} --epochs "
+         f"{E['ROUND_EPOCHS']}` from the labelled model, then `eval --checkpoint` each model, with the default "
+         "vetoes and as the plain argmax (`--verify-top 0 --collision-check off`).")
+    rounds = load(f"{d}/improve.json") or []
+    t = load(f"{d}/improve.time.json")
+    print(f"The loop took {DASH if t is None else secs(t['wall_s'])}.")
+    print()
+    rows = []
+    for i in range(int(E["ROUNDS"]) + 1):
+        tag = "start" if i == 0 else f"round_{i:02d}"
+        g = lambda s: ev(f"{tag}-{s}", f"{d}/eval")
+        info = DASH if i == 0 or i > len(rounds) else (
+            f"{rounds[i - 1]['trials']} trials, {pct(rounds[i - 1]['collection_success_rate'])} %")
+        for argmax in ("", "-argmax"):
+            rows.append([("labels only" if i == 0 else f"round {i}") + (" argmax" if argmax else ""), info,
+                         count(g("train" + argmax)), rate(g("test" + argmax)), moved(g("enp8" + argmax)),
+                         rate(g("enp8" + argmax)), rate(g("htest" + argmax)), moved(g("henp8" + argmax))])
+    rows.append(["oracle, np8", DASH, DASH, DASH, moved(ev("oracle-enp8")), rate(ev("oracle-enp8")), DASH,
+                 moved(ev("oracle-henp8"))])
+    md(["model", "collected", "train", f"test, {seeds(E['TEST_SEEDS'])}", f"empty_bin, {seeds(E['EMPTY_SEEDS'])}, np8",
+        "its picks", f"held out: test, {seeds(E['HELD_TEST'])}", f"held out: empty_bin, {seeds(E['HELD_EMPTY'])}, np8"],
+       rows)
+
+
+def t_slurm():
+    d = f"{out}/slurm"
+    head("Sweeps under Slurm", f"`eval --task empty_bin --policy oracle --seeds {E['SLURM_SEEDS']} --n-past-action 8` "
+         "in one process (`--threads 2`), and as `SHARDS=2 CPUS_PER_TASK=1 scripts/slurm/submit.sh` on the one-node "
+         "Slurm, from submission to the merge job's end.")
+    single, slurm = load(f"{d}/single.time.json"), load(f"{d}/slurm.time.json")
+    rows = []
+    if single and slurm:
+        overhead = slurm["wall_s"] - max(slurm["shard_walls"])
+        rows.append([secs(single["wall_s"]), secs(slurm["wall_s"]), f"{slurm['wall_s'] / single['wall_s']:.2f}",
+                     ", ".join(secs(w) for w in slurm["shard_walls"]), secs(overhead), slurm["state"]])
+    md(["one process", "2 shards under Slurm", "ratio", "each shard's own eval time", "overhead (rest of the wall)",
+        "merge job"], rows)
 
 
 def t_verification():

@@ -461,3 +461,58 @@ fn eval_shards_merge_into_the_unsharded_report_and_bad_merges_are_refused() {
     );
     assert_eq!(partial["results"]["seeds"], serde_json::json!([0, 100]));
 }
+
+#[test]
+fn improve_collects_with_each_round_s_model_and_a_rerun_continues_without_redoing() {
+    let setup = Setup::new();
+    let improve = || {
+        graspmap(&[
+            "--data",
+            setup.dir.path().to_str().unwrap(),
+            "--split",
+            setup.path("split.json").to_str().unwrap(),
+            "--quiet",
+            "improve",
+            "--rounds",
+            "2",
+            "--scenes",
+            "1",
+            "--epochs",
+            "1",
+            "--clutter",
+            "2",
+            "--max-attempts",
+            "2",
+        ])
+    };
+    assert_ok(&improve());
+    let summary = read_json(&setup.path("improve/summary.json"));
+    let rounds = summary.as_array().unwrap();
+    assert_eq!(rounds.len(), 2);
+    let round1_model = setup.path("improve/round_01/model/best.safetensors");
+    assert_eq!(
+        rounds[1]["collected_with"],
+        round1_model.to_str().unwrap(),
+        "round 2 collects with round 1's model"
+    );
+    assert_eq!(
+        rounds[1]["trials_so_far"].as_u64().unwrap(),
+        rounds[0]["trials"].as_u64().unwrap() + rounds[1]["trials"].as_u64().unwrap()
+    );
+    let meta = read_json(&setup.path("improve/round_02/model/best.json"));
+    let trained_on = &meta["trained_on"];
+    assert_eq!(trained_on["trials"].as_array().unwrap().len(), 2);
+    assert_eq!(trained_on["start"]["path"], round1_model.to_str().unwrap());
+    // A rerun finds every stage done and changes nothing.
+    let before = store_bytes(&setup.path("improve/round_02"));
+    assert_ok(&improve());
+    let after = store_bytes(&setup.path("improve/round_02"));
+    let models = |files: &[(String, Vec<u8>)]| -> Vec<(String, Vec<u8>)> {
+        files
+            .iter()
+            .filter(|(name, _)| name.starts_with("model/") || name.starts_with("trials/"))
+            .cloned()
+            .collect()
+    };
+    assert_eq!(models(&before), models(&after));
+}
