@@ -10,7 +10,7 @@ use super::{
     TrainArgs, TrialArgs,
 };
 use crate::assets::objects::{ObjectLibrary, SplitFile};
-use crate::commands::collect::CollectConfig;
+use crate::commands::collect::{CollectConfig, CollectPolicy};
 use crate::commands::eval::EvalConfig;
 use crate::commands::grasp::{GraspChoice, GraspConfig};
 use crate::commands::improve::ImproveConfig;
@@ -138,6 +138,15 @@ impl TrialArgs {
 
 impl CollectArgs {
     pub(super) fn config(self, data: &Path) -> anyhow::Result<CollectConfig> {
+        if let (Some(path), CollectPolicy::Oracle | CollectPolicy::Random) =
+            (&self.trials.checkpoint, self.trials.policy)
+        {
+            bail!(
+                "--checkpoint {} is used only by --policy model and mix, and this run is --policy {}; leave it out",
+                path.display(),
+                self.trials.policy
+            );
+        }
         let out = self.out.unwrap_or_else(|| data.join("trials"));
         let mut config = self
             .trials

@@ -419,6 +419,60 @@ const CASES: &[Case] = &[
         "does not exist",
     ),
     case("--data {data} train --input rgbd", 2, "depth"),
+    // Trials, crops, shards and merges.
+    case("--data {data} train --crop 30", 2, "multiple of 4"),
+    case("--data {data} train --trial-weight 0", 2, "--trial-weight"),
+    case("--data {data} train --no-labels", 2, "--trials"),
+    case(
+        "--data {data} train --trials {tmp}/nothing --epochs 1",
+        2,
+        "not a trial store",
+    ),
+    case("--data {data} collect --shard 5/4", 2, "5/4"),
+    case("--data {data} collect --shard x", 2, "I/N"),
+    case(
+        "--data {data} collect --clutter 9 --scenes 1",
+        2,
+        "--clutter 9",
+    ),
+    case("--data {data} collect --explore 1.5", 2, "--explore"),
+    case(
+        "--data {data} collect --check --out {tmp}/nothing",
+        2,
+        "problem(s)",
+    ),
+    case(
+        "--data {data} collect --scenes 1 --checkpoint {tmp}/none.safetensors",
+        2,
+        "none.safetensors",
+    ),
+    case(
+        "--data {data} eval --task test --seeds 1-2 --shard 3/3",
+        2,
+        "--shard 3/3",
+    ),
+    case(
+        "--data {data} eval --task empty_bin --shard 1/2 --record {tmp}/x.mp4",
+        2,
+        "--record",
+    ),
+    case(
+        "merge --out {tmp}/m.json {tmp}/missing.json",
+        2,
+        "missing.json",
+    ),
+    case("merge --out {tmp}/m.json", 2, "SHARD_DIR"),
+    case("--data {data} improve --rounds 0", 2, "--rounds"),
+    case(
+        "--data {data} collect --policy oracle --checkpoint {tmp}/m.safetensors",
+        2,
+        "--policy oracle",
+    ),
+    case(
+        "--data {tmp}/empty improve --rounds 1 --scenes 1",
+        2,
+        "graspmap train",
+    ),
 ];
 
 /// The workspace the rows run in.
