@@ -288,7 +288,7 @@ t_training() {
 }
 
 t_crop() {
-  local d=$out/crop crop spec
+  local d=$out/crop crop name spec
   rm -rf "$d"
   ensure_labels
   for crop in 0 64; do
@@ -297,9 +297,9 @@ t_crop() {
     log "crop: train --epochs $EPOCHS --crop $crop"
     "$bin" --data "$d/$crop" --quiet --json "$d/$crop/train.json" train --epochs "$EPOCHS" \
       --crop "$crop" >"$d/$crop/train.log" 2>&1
-    for spec in train test enp8; do
-      spec_args "$spec"
-      eval_into "$d/$crop/$spec.json" "$d/$crop" "${spec[@]}"
+    for name in train test enp8; do
+      spec_args "$name"
+      eval_into "$d/$crop/eval-$name.json" "$d/$crop" "${spec[@]}"
     done
   done
 }
@@ -308,7 +308,7 @@ t_crop() {
 # model on train, test and empty_bin (held-out seeds too), with the vetoes and as the plain
 # argmax; the oracle with memory beside them.
 t_trials() {
-  local d=$out/trials spec tag ck
+  local d=$out/trials name spec tag ck
   ensure_model
   if ! [[ -f $d/run && $(cat "$d/run") == "$run_id" ]]; then
     rm -rf "$d"
@@ -322,10 +322,10 @@ t_trials() {
   fi
   for tag in start $(seq -f 'round_%02g' 1 "$ROUNDS"); do
     if [[ $tag == start ]]; then ck=$d/data/affordance/best.safetensors; else ck=$d/data/improve/$tag/model/best.safetensors; fi
-    for spec in train test htest enp8 henp8; do
-      spec_args "$spec"
-      eval_into "$d/eval/$tag-$spec.json" "$d/data" --checkpoint "$ck" "${spec[@]}"
-      eval_into "$d/eval/$tag-$spec-argmax.json" "$d/data" --checkpoint "$ck" "${spec[@]}" \
+    for name in train test htest enp8 henp8; do
+      spec_args "$name"
+      eval_into "$d/eval/$tag-$name.json" "$d/data" --checkpoint "$ck" "${spec[@]}"
+      eval_into "$d/eval/$tag-$name-argmax.json" "$d/data" --checkpoint "$ck" "${spec[@]}" \
         --verify-top 0 --collision-check off
     done
   done
@@ -924,7 +924,7 @@ def t_crop():
     rows = []
     for crop in ("0", "64"):
         r = load(f"{d}/{crop}/train.json")
-        g = lambda s: ev(s, f"{d}/{crop}")
+        g = lambda s: ev("eval-" + s, f"{d}/{crop}")
         rows.append([f"`--crop {crop}`", DASH if r is None else f"{r['wall_seconds']:.1f} s",
                      DASH if r is None else f"{r['best_val_loss']:.5f}", count(g("train")), rate(g("test")),
                      moved(g("enp8"))])
