@@ -27,20 +27,7 @@ command="${args[0]}"
 # The old merge waits on tasks that failed: it never runs; make sure it is gone.
 scancel "$MERGE_JOB" 2>/dev/null || true
 
-flags=(--parsable --time "${TIME_LIMIT:-01:00:00}" --cpus-per-task "${CPUS_PER_TASK:-2}"
-  --mem "${MEM_PER_TASK:-4G}")
-[ -n "${PARTITION:-}" ] && flags+=(--partition "$PARTITION")
-# shellcheck disable=SC2206
-[ -n "${SBATCH_EXTRA:-}" ] && flags+=($SBATCH_EXTRA)
-array=$(sbatch "${flags[@]}" --array="$tasks" --job-name "graspmap-$command" \
-  --output "$RUN_DIR/logs/shard_%a.out" "$here/shard.sbatch" "${args[@]}")
-array="${array%%;*}"
-merge=$(sbatch "${flags[@]}" --dependency="afterok:$array" --kill-on-invalid-dep=yes \
-  --job-name "graspmap-merge" --output "$RUN_DIR/logs/merge.out" "$here/merge.sbatch" "$command")
-merge="${merge%%;*}"
-cat >"$RUN_DIR/jobs.env" <<ENV
-ARRAY_JOB=$array
-MERGE_JOB=$merge
-SHARDS=$SHARDS
-ENV
+# shellcheck source=scripts/slurm/common.sh
+source "$here/common.sh"
+submit_shards "$tasks" "${args[@]}"
 echo "resubmitted tasks $tasks as array $array, merge $merge -> $RUN_DIR"

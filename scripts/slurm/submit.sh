@@ -50,24 +50,10 @@ mkdir -p "$RUN_DIR/logs"
 RUN_DIR="$(cd "$RUN_DIR" && pwd)"
 DATA="$(mkdir -p "$DATA" && cd "$DATA" && pwd)"
 
-flags=(--parsable --time "${TIME_LIMIT:-01:00:00}" --cpus-per-task "${CPUS_PER_TASK:-2}"
-  --mem "${MEM_PER_TASK:-4G}")
-[ -n "${PARTITION:-}" ] && flags+=(--partition "$PARTITION")
-# shellcheck disable=SC2206 # word splitting of the extra flags is the point
-[ -n "${SBATCH_EXTRA:-}" ] && flags+=($SBATCH_EXTRA)
-
 # The command and its arguments, one per line, for resubmit.sh.
 printf '%s\n' "$command" "$@" >"$RUN_DIR/command.args"
 
-array=$(sbatch "${flags[@]}" --array="1-$SHARDS" --job-name "graspmap-$command" \
-  --output "$RUN_DIR/logs/shard_%a.out" "$here/shard.sbatch" "$command" "$@")
-array="${array%%;*}"
-merge=$(sbatch "${flags[@]}" --dependency="afterok:$array" --kill-on-invalid-dep=yes \
-  --job-name "graspmap-merge" --output "$RUN_DIR/logs/merge.out" "$here/merge.sbatch" "$command")
-merge="${merge%%;*}"
-cat >"$RUN_DIR/jobs.env" <<ENV
-ARRAY_JOB=$array
-MERGE_JOB=$merge
-SHARDS=$SHARDS
-ENV
+# shellcheck source=scripts/slurm/common.sh
+source "$here/common.sh"
+submit_shards "1-$SHARDS" "$command" "$@"
 echo "array $array (${SHARDS} shards), merge $merge -> $RUN_DIR"

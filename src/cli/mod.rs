@@ -1,7 +1,14 @@
 //! Command-line flags (clap derive). Flags stop here: each command gets a validated config struct.
 
+mod bench;
 mod resolve;
+mod trials;
 mod values;
+
+pub(crate) use bench::BenchCommand;
+use trials::{parse_crop, parse_shard};
+pub(crate) use trials::{CollectArgs, ImproveArgs, MergeArgs, TrialArgs};
+pub(crate) use values::PrecisionChoice;
 
 use std::path::PathBuf;
 
@@ -10,12 +17,10 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::commands;
 use crate::commands::bench::{BenchConfig, PeerPython};
-use crate::commands::collect::CollectPolicy;
 use crate::commands::scene::SceneConfig;
 use crate::data::input::InputKind;
 use crate::data::trials::Shard;
 use crate::model::config::TrainConfig;
-use crate::model::unet::Precision;
 use crate::policy::collision::CollisionCheck;
 use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;
@@ -97,34 +102,6 @@ pub(crate) enum Command {
     Bench(BenchCommand),
 }
 
-/// What `graspmap bench` measures.
-#[derive(Debug, Subcommand)]
-pub(crate) enum BenchCommand {
-    /// Training-step throughput and 8-rotation inference latency, Rust and Python alternating.
-    Train(BenchTrainArgs),
-}
-
-/// `graspmap bench train`.
-#[derive(Debug, Args)]
-pub(crate) struct BenchTrainArgs {
-    /// Timed steps per block and side (after 3 warm-up steps).
-    #[arg(long, default_value_t = 20, value_parser = clap::value_parser!(u32).range(1..))]
-    pub(crate) steps: u32,
-    /// Blocks per side, alternating Rust and Python.
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..))]
-    pub(crate) rounds: u32,
-    /// Precision of both sides.
-    #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
-    pub(crate) precision: PrecisionChoice,
-    /// Time only the Rust side (no Python environment needed).
-    #[arg(long, conflicts_with = "python")]
-    pub(crate) no_peer: bool,
-    /// The peer's Python, with torch 2.13 [default: ./.venv-bench/bin/python, installed by
-    /// scripts/setup-bench-peer.sh when run from a checkout].
-    #[arg(long, value_name = "PATH")]
-    pub(crate) python: Option<PathBuf>,
-}
-
 /// `graspmap train`.
 #[derive(Debug, Args)]
 pub(crate) struct TrainArgs {
@@ -180,41 +157,6 @@ pub(crate) struct TrainArgs {
     /// Where the model goes [default: DATA/affordance].
     #[arg(long, value_name = "DIR")]
     pub(crate) out_dir: Option<PathBuf>,
-}
-
-/// `--crop` values: 0, or a multiple of 4 from 32 to 128.
-fn parse_crop(text: &str) -> Result<u32, String> {
-    let crop: u32 = text.trim().parse().map_err(|_| {
-        format!("'{text}' is not a whole number of pixels (e.g. 64, or 0 for whole images)")
-    })?;
-    if crop != 0 && (!crop.is_multiple_of(4) || !(32..=128).contains(&crop)) {
-        return Err(format!(
-            "{crop} px: a crop is a multiple of 4 from 32 to 128, or 0 for whole images"
-        ));
-    }
-    Ok(crop)
-}
-
-/// `--precision` values.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub(crate) enum PrecisionChoice {
-    /// bf16 where the CPU has native bf16 instructions, else fp32.
-    Auto,
-    /// float32 throughout.
-    Fp32,
-    /// bf16 convolutions (channels_last) over float32 master weights.
-    Bf16,
-}
-
-impl PrecisionChoice {
-    /// The precision to use on this machine.
-    pub(crate) fn resolve(self) -> Precision {
-        match self {
-            PrecisionChoice::Auto => Precision::fastest_supported(),
-            PrecisionChoice::Fp32 => Precision::Fp32,
-            PrecisionChoice::Bf16 => Precision::Bf16,
-        }
-    }
 }
 
 /// `graspmap eval`.
@@ -304,119 +246,6 @@ pub(crate) struct EvalArgs {
     /// part; `graspmap merge` joins the shards' reports into the whole sweep's.
     #[arg(long, value_name = "I/N", value_parser = parse_shard, conflicts_with = "record")]
     pub(crate) shard: Option<Shard>,
-}
-
-/// `graspmap collect`.
-#[derive(Debug, Args)]
-pub(crate) struct CollectArgs {
-    /// The trial store [default: DATA/trials].
-    #[arg(long, value_name = "DIR")]
-    pub(crate) out: Option<PathBuf>,
-    /// Seed of every scene's drop and of the policies' draws.
-    #[arg(long, default_value_t = 0)]
-    pub(crate) seed: u64,
-    /// Scenes of the whole run (all shards together).
-    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u64).range(1..))]
-    pub(crate) scenes: u64,
-    #[command(flatten)]
-    pub(crate) trials: TrialArgs,
-    /// Collect only part of the scenes: shard I of N holds scenes s with s mod N = I − 1.
-    #[arg(long, value_name = "I/N", value_parser = parse_shard)]
-    pub(crate) shard: Option<Shard>,
-    /// Delete the store's scenes and start over.
-    #[arg(long, conflicts_with = "check")]
-    pub(crate) force: bool,
-    /// Only validate the store; exit 2 if anything is wrong.
-    #[arg(long)]
-    pub(crate) check: bool,
-}
-
-/// How trials are collected: shared by `collect` and `improve`.
-#[derive(Debug, Args, Clone)]
-pub(crate) struct TrialArgs {
-    /// Training objects dropped per scene (at most the split's training objects).
-    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..))]
-    pub(crate) clutter: u32,
-    /// Most attempts per scene (a scene also ends when bin 1 is empty).
-    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..=99))]
-    pub(crate) max_attempts: u32,
-    /// Who chooses the grasps.
-    #[arg(long, value_parser = named::<CollectPolicy>(), default_value = "mix")]
-    pub(crate) policy: CollectPolicy,
-    /// Chance that a model attempt samples its action from the maps instead (0 to 1).
-    #[arg(long, value_name = "P", default_value_t = 0.3, value_parser = fraction)]
-    pub(crate) explore: f32,
-    /// Exploration's temperature: actions are drawn ∝ score^(1/T) (above 0, at most 10).
-    #[arg(long, value_name = "T", default_value_t = 1.0, value_parser = positive_up_to::<f32>(10.0))]
-    pub(crate) temperature: f32,
-    /// mix: chance that the oracle chooses an attempt (0 to 1).
-    #[arg(long, value_name = "P", default_value_t = 0.5, value_parser = fraction)]
-    pub(crate) oracle_share: f32,
-    /// Failure suppression within a scene, as eval's --n-past-action.
-    #[arg(
-        long = "n-past-action",
-        visible_alias = "n_past_action",
-        value_name = "N",
-        default_value_t = 8
-    )]
-    pub(crate) n_past_action: usize,
-    /// Model weights for model and mix [default: DATA/affordance/best.safetensors].
-    #[arg(long, value_name = "PATH")]
-    pub(crate) checkpoint: Option<PathBuf>,
-    /// Arithmetic of the network.
-    #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
-    pub(crate) precision: PrecisionChoice,
-}
-
-/// `graspmap merge`.
-#[derive(Debug, Args)]
-pub(crate) struct MergeArgs {
-    /// The shard stores, as `collect --shard I/N` wrote them.
-    #[arg(required = true, value_name = "SHARD_DIR")]
-    pub(crate) inputs: Vec<PathBuf>,
-    /// The merged store: a new (or empty) folder.
-    #[arg(long, value_name = "DIR")]
-    pub(crate) out: PathBuf,
-    /// Merge the shards that are there when some are missing; the store says which.
-    #[arg(long)]
-    pub(crate) allow_partial: bool,
-}
-
-/// `graspmap improve`.
-#[derive(Debug, Args)]
-pub(crate) struct ImproveArgs {
-    /// Rounds of collect-then-retrain.
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=20))]
-    pub(crate) rounds: u32,
-    /// Scenes collected per round.
-    #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u64).range(1..))]
-    pub(crate) scenes: u64,
-    /// Epochs of retraining per round, starting from the round's model.
-    #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
-    pub(crate) epochs: u32,
-    /// Seed of the rounds' collection and training.
-    #[arg(long, default_value_t = 0)]
-    pub(crate) seed: u64,
-    /// After each round, evaluate its model on empty_bin with these seeds (with
-    /// --n-past-action 8), and put the figures in the round's summary.
-    #[arg(long, value_name = "LIST", value_parser = parse_seed_list)]
-    pub(crate) eval_seeds: Option<SeedList>,
-    #[command(flatten)]
-    pub(crate) trials: TrialArgs,
-    /// Train on PX × PX crops (as train --crop).
-    #[arg(long, value_name = "PX", default_value_t = TrainConfig::default().crop, value_parser = parse_crop)]
-    pub(crate) crop: u32,
-    /// A trial's loss weight (as train --trial-weight).
-    #[arg(long, value_name = "W", default_value_t = TrainConfig::default().trial_weight, value_parser = positive_up_to::<f32>(1.0))]
-    pub(crate) trial_weight: f32,
-    /// Where the rounds go [default: DATA/improve].
-    #[arg(long, value_name = "DIR")]
-    pub(crate) out: Option<PathBuf>,
-}
-
-/// `--shard` values.
-fn parse_shard(text: &str) -> Result<Shard, String> {
-    Shard::parse(text)
 }
 
 /// `graspmap predict`.
@@ -735,7 +564,6 @@ fn refuse_unused_globals(global: &GlobalArgs, command: &Command) -> anyhow::Resu
     }
     Ok(())
 }
-
 fn init_logging(quiet: bool) {
     let default = if quiet { "warn" } else { "info" };
     let filter = tracing_subscriber::EnvFilter::try_from_env("GRASPMAP_LOG")

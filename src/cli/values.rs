@@ -1,6 +1,7 @@
 //! Parsing one flag's value: names of options, seed lists, pixels, label addresses and numbers
 //! in their documented ranges, each refusing a bad value with a message that names it.
 
+use crate::model::unet::Precision;
 use anyhow::{bail, Context as _};
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
 
@@ -128,4 +129,26 @@ pub(crate) fn parse_pixel(text: &str) -> anyhow::Result<(u32, u32)> {
         format!("--pixel {u},{v} is outside the 128 × 128 image (use 0..=127 for each)")
     })?;
     Ok((grasp.u, grasp.v))
+}
+
+/// `--precision` values.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub(crate) enum PrecisionChoice {
+    /// bf16 where the CPU has native bf16 instructions, else fp32.
+    Auto,
+    /// float32 throughout.
+    Fp32,
+    /// bf16 convolutions (channels_last) over float32 master weights.
+    Bf16,
+}
+
+impl PrecisionChoice {
+    /// The precision to use on this machine.
+    pub(crate) fn resolve(self) -> Precision {
+        match self {
+            PrecisionChoice::Auto => Precision::fastest_supported(),
+            PrecisionChoice::Fp32 => Precision::Fp32,
+            PrecisionChoice::Bf16 => Precision::Bf16,
+        }
+    }
 }
