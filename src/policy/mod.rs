@@ -11,6 +11,8 @@ pub mod heights;
 pub(crate) mod model;
 pub mod oracle;
 pub(crate) mod suppression;
+#[cfg(test)]
+pub(crate) mod synthetic;
 pub mod verify;
 
 use image::RgbImage;

@@ -188,7 +188,10 @@ pub(crate) struct Cloud {
 impl Cloud {
     /// Buckets the surface points of a frame's height map.
     pub(crate) fn new(heights: &HeightMap) -> Self {
-        let points: Vec<Vector> = heights.surface_points().collect();
+        Self::from_points(heights.surface_points().collect())
+    }
+
+    fn from_points(points: Vec<Vector>) -> Self {
         let (lo, hi) = points
             .iter()
             .fold(([f32::MAX; 2], [f32::MIN; 2]), |(lo, hi), p| {
@@ -313,7 +316,10 @@ pub(crate) fn check_grasp(
         if w > pad_half_width || s.abs() > pad_outer {
             continue;
         }
-        if s.abs() >= half_open {
+        // The margin beside a pad's inner corner belongs to the pad: the corner comes down
+        // there, and a flank rising into it stopped the arm at 204 N on a mesh mustard bottle.
+        let beside_inner_corner = s.abs() > limit && w > config.pad_width / 2.0;
+        if s.abs() >= half_open || beside_inner_corner {
             // Under a pad: the surface must be below the pad's lower edge.
             if p.z >= tcp.z {
                 return Err(Rejection::PadBlocked);
@@ -369,4 +375,62 @@ pub(crate) fn check_grasp(
         asymmetry: (lo + hi).abs() / 2.0,
         width: hi - lo,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::policy::synthetic::floor_frame;
+
+    /// A grasp across the middle of a 26 mm block, the cloud the camera sees, and the checks
+    /// with one more surface point at (`along`, `across`) from the TCP, `above` its height.
+    fn with_extra_point(along: f32, across: f32, above: f32) -> Result<Assessment, Rejection> {
+        let camera = Camera::top_down();
+        let frame = floor_frame(&camera, Some(1));
+        let grasp = PixelGrasp {
+            u: 64,
+            v: 64,
+            angle_deg: 0.0,
+        };
+        let target = world_grasp(&camera, &frame, grasp);
+        let normal = Vector::new(-target.closing.y, target.closing.x, 0.0);
+        let mut points: Vec<Vector> = HeightMap::new(&camera, &frame).surface_points().collect();
+        points.push(target.tcp + target.closing * along + normal * across + Vector::Z * above);
+        let config = CheckConfig::default();
+        check_grasp(
+            &Cloud::from_points(points),
+            &camera,
+            &frame,
+            grasp,
+            target.tcp,
+            &config,
+        )
+    }
+
+    #[test]
+    fn a_surface_beside_a_pads_inner_corner_blocks_the_pad() {
+        let config = CheckConfig::default();
+        let half_open = config.opening / 2.0;
+        let inside_margin = half_open - config.margin / 2.0;
+        let beside_pad = config.pad_width / 2.0 + config.margin / 2.0;
+        assert!(with_extra_point(0.0, 0.0, -0.005).is_ok());
+        assert_eq!(
+            with_extra_point(inside_margin, beside_pad, 0.01),
+            Err(Rejection::PadBlocked)
+        );
+        assert_eq!(
+            with_extra_point(-inside_margin, -beside_pad, 0.01),
+            Err(Rejection::PadBlocked)
+        );
+        // Below the pads' lower edge the same spot is free.
+        assert!(with_extra_point(inside_margin, beside_pad, -0.002).is_ok());
+        // In front of the pad's face it is part of what is squeezed, and too wide.
+        assert_eq!(
+            with_extra_point(inside_margin, 0.0, 0.01),
+            Err(Rejection::TooWide)
+        );
+        // Beyond the margin beside the pad nothing is touched.
+        let clear_of_pad = config.pad_width / 2.0 + config.margin * 1.5;
+        assert!(with_extra_point(inside_margin, clear_of_pad, 0.01).is_ok());
+    }
 }
