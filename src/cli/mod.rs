@@ -194,6 +194,11 @@ pub(crate) struct EvalArgs {
     /// (0 = its own rotation only, 4 = all).
     #[arg(long, default_value_t = 0, value_parser = clap::value_parser!(u8).range(0..=4))]
     pub(crate) suppress_rotation_reach: u8,
+    /// Suppression: lower the rotations beyond that reach too, by a Gaussian of this height
+    /// (0 = leave them, 1 = as much as the failed one), so that spots that failed wait until
+    /// the untried ones have had their turn.
+    #[arg(long, value_name = "DEPTH", default_value_t = SuppressionConfig::default().other_rotations, value_parser = fraction)]
+    pub(crate) suppress_other_rotations: f32,
     /// Suppression: remember successful actions too, not only failures.
     #[arg(long)]
     pub(crate) suppress_successes: bool,
@@ -226,6 +231,10 @@ pub(crate) struct EvalArgs {
     /// empty_bin: most pick attempts per scene.
     #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) max_attempts: u32,
+    /// empty_bin: end a scene after K failed attempts in a row, as a robot that declares the
+    /// bin done (0 = never: the reference's fixed budget of --max-attempts).
+    #[arg(long, value_name = "K", default_value_t = 0)]
+    pub(crate) give_up_after: u32,
     /// Write the episode video: an oblique view beside the camera view with the chosen grasp
     /// (one seed only); .mp4 for H.264 (small, plays in browsers) or .gif.
     #[arg(long, value_name = "VIDEO")]

@@ -229,6 +229,7 @@ fn evaluate(
         },
         model: ModelPolicyConfig::default(),
         max_attempts: 25,
+        give_up_after: 0,
         record: None,
         resume: false,
         check_invariants: false,

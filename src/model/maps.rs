@@ -48,9 +48,9 @@ impl AffordanceMaps {
         self.size
     }
 
-    /// Subtracts a unit-peak Gaussian of `sigma_px` around `centre` (a point in map `bin`'s
-    /// frame), out to 3σ, and clips to [0, 1]: failure suppression's lowering of one map.
-    pub(crate) fn lower_around(&mut self, bin: usize, centre: [f32; 2], sigma_px: f32) {
+    /// Subtracts a Gaussian of height `peak` and `sigma_px` around `centre` (a point in map
+    /// `bin`'s frame), out to 3σ, and clips to [0, 1]: failure suppression's lowering of one map.
+    pub(crate) fn lower_around(&mut self, bin: usize, centre: [f32; 2], sigma_px: f32, peak: f32) {
         let two_var = 2.0 * sigma_px * sigma_px;
         let reach = (3.0 * sigma_px).ceil() as i64;
         let [cx, cy] = centre;
@@ -61,7 +61,7 @@ impl AffordanceMaps {
                 let du = u as f32 + 0.5 - cx;
                 let dv = v as f32 + 0.5 - cy;
                 let i = self.index(bin, u as u32, v as u32);
-                let lowered = self.values[i] - (-(du * du + dv * dv) / two_var).exp();
+                let lowered = self.values[i] - peak * (-(du * du + dv * dv) / two_var).exp();
                 self.values[i] = lowered.clamp(0.0, 1.0);
             }
         }

@@ -73,6 +73,9 @@ pub(crate) struct Decision {
     pub(crate) vis: Option<RgbImage>,
     /// Wall seconds spent on rotations, network, checks and argmax (model policy).
     pub(crate) network_seconds: f64,
+    /// Model policy with verification: whether the executed grasp passed it (false: nothing
+    /// did, and the argmax was executed anyway).
+    pub(crate) verified: Option<bool>,
 }
 
 impl Decision {
@@ -83,6 +86,7 @@ impl Decision {
             choice: None,
             vis: None,
             network_seconds: 0.0,
+            verified: None,
         }
     }
 }

@@ -134,6 +134,7 @@ impl ModelPolicy {
             choice: Some(choice),
             vis: Some(visualisation(&rotated, &maps, &choice)),
             network_seconds: start.elapsed().as_secs_f64(),
+            verified: None,
         }
     }
 }
@@ -172,6 +173,7 @@ impl Policy for ModelPolicy {
             maps.restrict(&allowed);
         }
         let mut choice = maps.choose();
+        let mut verified = None;
         if verify_top > 0 {
             // The network ranks, verification vetoes: in clutter its peak often sits on a
             // box's edge or corner, where the pads squeeze the box out, or across a side wider
@@ -187,6 +189,7 @@ impl Policy for ModelPolicy {
                     let unchecked = unchecked.as_ref()?;
                     first_verified(unchecked.ranked(verify_rejected), verify_floor, passes)
                 });
+            verified = Some(passed.is_some());
             if let Some(passed) = passed {
                 choice = passed;
             }
@@ -212,6 +215,7 @@ impl Policy for ModelPolicy {
             choice: Some(choice),
             vis: Some(visualisation(&rotated, &maps, &choice)),
             network_seconds,
+            verified,
         }
     }
 }

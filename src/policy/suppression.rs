@@ -17,8 +17,18 @@ pub(crate) struct SuppressionConfig {
     /// Lower the rotations within this many bins of the past action's (circularly, 22.5° each):
     /// 0 = its own rotation only, 4 = all 8.
     pub(crate) rotation_reach: usize,
+    /// The height of the Gaussian subtracted from the rotations beyond `rotation_reach` (0 =
+    /// leave them alone): a partial lowering makes spots that failed at any angle wait until
+    /// the untried ones have had their turn, without ruling them out. Left out of reports and
+    /// trial manifests when 0, so that those written before it existed still match.
+    #[serde(skip_serializing_if = "is_zero")]
+    pub(crate) other_rotations: f32,
     /// Whether successful actions enter the memory too.
     pub(crate) remember_successes: bool,
+}
+
+fn is_zero(value: &f32) -> bool {
+    *value == 0.0
 }
 
 impl Default for SuppressionConfig {
@@ -29,6 +39,7 @@ impl Default for SuppressionConfig {
             remember: 0,
             sigma_px: 4.0,
             rotation_reach: 0,
+            other_rotations: 0.0,
             remember_successes: false,
         }
     }
@@ -67,7 +78,8 @@ impl Suppression {
         self.past.iter()
     }
 
-    /// Subtracts a unit-peak Gaussian around each remembered action and clips to [0, 1]. The
+    /// Subtracts a unit-peak Gaussian around each remembered action in the rotations within
+    /// reach, and one of `other_rotations`' height in the rest, and clips to [0, 1]. The
     /// action's original-image grasp centre is carried into each rotated frame, so all bins see
     /// the same spot on the object.
     pub(crate) fn apply(&self, maps: &mut AffordanceMaps) {
@@ -76,11 +88,16 @@ impl Suppression {
             let past_bin = angle_bin(past.angle_deg);
             for bin in 0..BINS {
                 let apart = (bin + BINS - past_bin) % BINS;
-                if apart.min(BINS - apart) > self.config.rotation_reach {
+                let peak = if apart.min(BINS - apart) <= self.config.rotation_reach {
+                    1.0
+                } else {
+                    self.config.other_rotations
+                };
+                if peak <= 0.0 {
                     continue;
                 }
                 let rotated = rotate_point(centre, -bin_angle(bin), maps.size());
-                maps.lower_around(bin, rotated, self.config.sigma_px);
+                maps.lower_around(bin, rotated, self.config.sigma_px, peak);
             }
         }
     }
@@ -164,6 +181,35 @@ mod tests {
         });
         all.record(choice.grasp, true);
         assert_eq!(all.past().count(), 1);
+    }
+
+    #[test]
+    fn the_other_rotations_are_lowered_by_their_own_depth() {
+        let raw = bumpy_maps();
+        let first = raw.choose();
+        let mut memory = Suppression::new(SuppressionConfig {
+            remember: 1,
+            other_rotations: 0.25,
+            ..SuppressionConfig::default()
+        });
+        memory.record(first.grasp, false);
+        let mut maps = raw.clone();
+        memory.apply(&mut maps);
+        for bin in 0..BINS {
+            // Each map's largest drop is its Gaussian's peak at the carried centre, where the
+            // bumps stand 0.8 high or more: the failed bin loses all of it, the others 0.25.
+            let drop = raw
+                .map(bin)
+                .iter()
+                .zip(maps.map(bin))
+                .map(|(before, after)| before - after)
+                .fold(0.0f32, f32::max);
+            if bin == first.bin {
+                assert!(drop > 0.8, "bin {bin}: dropped {drop}");
+            } else {
+                assert!((drop - 0.25).abs() < 0.01, "bin {bin}: dropped {drop}");
+            }
+        }
     }
 
     #[test]

@@ -7,7 +7,7 @@ use std::path::PathBuf;
 use crate::grasp::PixelGrasp;
 use crate::metrics::{median, FailureTally, Rate, Spread};
 use crate::model::maps::Choice;
-use crate::named::{named_enum, Named};
+use crate::named::{counted, named_enum, Named};
 use crate::policy::PolicyKind;
 use crate::sim::pick::PickReason;
 use crate::sim::ObjectLocation;
@@ -64,6 +64,10 @@ pub(crate) struct AttemptRecord {
     pub(crate) grasp: Option<PixelGrasp>,
     /// Model policy: the map the grasp came from and its score there.
     pub(crate) choice: Option<Choice>,
+    /// Model policy with verification: whether the executed grasp passed it; false when
+    /// nothing did and the argmax was executed anyway. Absent otherwise, and in older reports.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) verified: Option<bool>,
     /// Whether an object was lifted, carried and placed.
     pub(crate) success: bool,
     /// Why the attempt ended so.
@@ -101,6 +105,10 @@ pub(crate) struct BinOutcome {
     pub(crate) lost: usize,
     /// Each object's final place.
     pub(crate) locations: BTreeMap<String, ObjectLocation>,
+    /// Whether the scene ended on `--give-up-after`'s run of failures (absent in reports
+    /// written before it existed).
+    #[serde(default)]
+    pub(crate) gave_up: bool,
 }
 
 /// One scene seed's run.
@@ -320,6 +328,20 @@ pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
             ));
         }
         lines.push(format!("success rate: {}", results.success.describe()));
+    }
+    let unverified: Vec<&AttemptRecord> = results
+        .runs
+        .iter()
+        .flat_map(|r| &r.attempts)
+        .filter(|a| a.verified == Some(false))
+        .collect();
+    if !unverified.is_empty() {
+        // These are where a failure is most likely (docs/evaluation.md, "Verification").
+        lines.push(format!(
+            "unverified: {} executed the argmax as nothing passed verification; {} succeeded",
+            counted(unverified.len(), "attempt"),
+            unverified.iter().filter(|a| a.success).count()
+        ));
     }
     let t = &results.timing;
     lines.push(format!(

@@ -191,7 +191,15 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
         assert_eq!(a["choice"]["bin"].as_f64().unwrap() * 22.5, angle);
         assert_timing_adds_up(&a["timing"]);
         assert!(a["timing"]["network"].as_f64().unwrap() > 0.0);
+        assert!(a["verified"].is_boolean(), "verification ran: {a}");
     }
+    // The report says how many executed grasps nothing verified.
+    let unverified = attempts.iter().filter(|a| a["verified"] == false).count();
+    assert_eq!(
+        stdout.contains("unverified: "),
+        unverified > 0,
+        "{unverified} unverified: {stdout}"
+    );
     assert_summary_matches(results);
     for a in 0..3 {
         let vis = setup.path(&format!(
@@ -283,6 +291,56 @@ fn empty_bin_counts_moved_left_and_lost_every_attempt() {
         .clone();
     assert_eq!(last["moved"], bin["moved"]);
     assert_eq!(report["results"]["moved"]["count"], 1);
+}
+
+#[test]
+fn give_up_after_ends_a_scene_on_its_first_run_of_failures() {
+    let setup = Setup::new();
+    let json = setup.path("eval.json");
+    let out = setup.run(&[
+        "eval",
+        "--task",
+        "empty_bin",
+        "--policy",
+        "random",
+        "--seeds",
+        "1-3",
+        "--max-attempts",
+        "6",
+        "--give-up-after",
+        "2",
+        "--json",
+        json.to_str().unwrap(),
+    ]);
+    assert_ok(&out);
+    let report = read_json(&json);
+    assert_eq!(report["config"]["give_up_after"], 2);
+    let mut gave_up = 0;
+    for run in report["results"]["runs"].as_array().unwrap() {
+        let failed: Vec<bool> = run["attempts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|a| !a["success"].as_bool().unwrap())
+            .collect();
+        let first_pair = failed.windows(2).position(|w| w[0] && w[1]);
+        if run["bin"]["gave_up"].as_bool().unwrap() {
+            gave_up += 1;
+            assert_eq!(first_pair, Some(failed.len() - 2), "{run}");
+        } else {
+            assert_eq!(first_pair, None, "{run}");
+            assert!(failed.len() == 6 || run["bin"]["left"] == 0, "{run}");
+        }
+    }
+    assert!(
+        gave_up > 0,
+        "the random policy fails twice in a row somewhere"
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        stdout.contains("gave up after 2 failed attempts in a row."),
+        "{stdout}"
+    );
 }
 
 #[test]

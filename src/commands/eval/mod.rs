@@ -50,6 +50,7 @@ struct Evaluation<'a> {
     /// Put each seed's visualisations in a seed<S>/ subfolder (several seeds).
     per_seed_vis: bool,
     max_attempts: u32,
+    give_up_after: u32,
     recording: Option<Vec<RgbImage>>,
     bar: indicatif::ProgressBar,
     check_invariants: bool,
@@ -101,6 +102,7 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         // By the whole sweep, so that shards write where the unsharded run would.
         per_seed_vis: config.seeds.len() > 1,
         max_attempts: config.max_attempts,
+        give_up_after: config.give_up_after,
         recording: config.record.as_ref().map(|_| Vec::new()),
         bar: context.progress_bar("attempts", per_scene * seeds.len() as u64, 0),
         check_invariants: config.check_invariants,
@@ -265,7 +267,8 @@ impl Evaluation<'_> {
         let mut setup_seconds = started.elapsed().as_secs_f64();
         let total = models.len();
         let mut memory = Suppression::new(self.suppression);
-        let mut attempts = Vec::new();
+        let mut attempts: Vec<AttemptRecord> = Vec::new();
+        let mut gave_up = false;
         for a in 0..self.max_attempts {
             if count(&cell, ObjectLocation::Bin1) == 0 {
                 self.bar.inc(u64::from(self.max_attempts - a));
@@ -301,6 +304,14 @@ impl Evaluation<'_> {
             if interrupt::requested().is_some() {
                 return Ok(None);
             }
+            let failing = attempts.iter().rev().take_while(|r| !r.success).count();
+            if self.give_up_after > 0 && failing >= self.give_up_after as usize {
+                gave_up = true;
+                self.bar.inc(u64::from(self.max_attempts - a - 1));
+                let line = format!("gave up after {failing} failed attempts in a row.");
+                self.bar.suspend(|| self.context.say(&line));
+                break;
+            }
         }
         let left = count(&cell, ObjectLocation::Bin1);
         let line = format!("{left} objects left in the bin.");
@@ -319,6 +330,7 @@ impl Evaluation<'_> {
                 left,
                 lost: count(&cell, ObjectLocation::Lost),
                 locations,
+                gave_up,
             }),
         }))
     }
@@ -410,6 +422,7 @@ impl Evaluation<'_> {
             object: None,
             grasp: decision.grasp.as_ref().ok().copied(),
             choice: decision.choice,
+            verified: decision.verified,
             success: outcome.success,
             reason: outcome.reason,
             detail: outcome.detail,

@@ -184,6 +184,7 @@ pub(super) fn resolved_config(
         "verify_rejected": model.then_some(config.model.verify_rejected),
         "centring": model && config.model.centring,
         "max_attempts": config.max_attempts,
+        "give_up_after": config.give_up_after,
         "attempts_per_object": ATTEMPTS_PER_OBJECT,
         "objects": names,
         "workcell": WorkcellConfig::default(),
