@@ -43,7 +43,7 @@ describe() {
     sweep) echo "scripts/grasp-sweep.sh oracle and random" ;;
     placing) echo "objects lost after a carry in empty_bin, bundled and with MESH_OBJECTS=DIR (--objects-dir)" ;;
     collision) echo "--collision-check off, walls and full without verification" ;;
-    verification) echo "--verify-rejected 0, --verify-floor 0.25 and --verify-top 0 against the defaults" ;;
+    verification) echo "--verify-rejected 0, --verify-floor 0.25, --verify-square 0, the planner's rule and --verify-top 0 against the defaults" ;;
     centring) echo "--centring without verification" ;;
     suppression) echo "failure suppression's parameters against the defaults" ;;
     variants) echo "scripts/variants.sh (rgb/rgbd input, clutter labels), with the floor and held-out seeds" ;;
@@ -328,9 +328,15 @@ t_trials() {
       eval_into "$d/eval/$tag-$name-argmax.json" "$d/data" --checkpoint "$ck" "${spec[@]}" \
         --verify-top 0 --collision-check off
     done
+    for name in enp8 henp8; do
+      spec_args "$name"
+      eval_into "$d/eval/$tag-$name-giveup6.json" "$d/data" --checkpoint "$ck" "${spec[@]}" --give-up-after 6
+    done
   done
   ev oracle enp8
   ev oracle henp8
+  ev oracle enp8 giveup6 --give-up-after 6
+  ev oracle henp8 giveup6 --give-up-after 6
 }
 
 t_slurm() {
@@ -460,6 +466,8 @@ t_verification() {
     ev model "$spec"
     ev model "$spec" vr0 --verify-rejected 0
     ev model "$spec" vf25 --verify-floor 0.25
+    ev model "$spec" sq0 --verify-square 0
+    ev model "$spec" planner --verify-strips 2 --verify-square 0
     ev model "$spec" vt0 --verify-top 0
   done
 }
@@ -951,8 +959,12 @@ def t_trials():
             rows.append([("labels only" if i == 0 else f"round {i}") + (" argmax" if argmax else ""), info,
                          count(g("train" + argmax)), rate(g("test" + argmax)), moved(g("enp8" + argmax)),
                          rate(g("enp8" + argmax)), rate(g("htest" + argmax)), moved(g("henp8" + argmax))])
+        rows.append([("labels only" if i == 0 else f"round {i}") + ", `--give-up-after 6`", DASH, DASH, DASH,
+                     moved(g("enp8-giveup6")), rate(g("enp8-giveup6")), DASH, moved(g("henp8-giveup6"))])
     rows.append(["oracle, np8", DASH, DASH, DASH, moved(ev("oracle-enp8")), rate(ev("oracle-enp8")), DASH,
                  moved(ev("oracle-henp8"))])
+    rows.append(["oracle, np8, `--give-up-after 6`", DASH, DASH, DASH, moved(ev("oracle-enp8-giveup6")),
+                 rate(ev("oracle-enp8-giveup6")), DASH, moved(ev("oracle-henp8-giveup6"))])
     md(["model", "collected", "train", f"test, {seeds(E['TEST_SEEDS'])}", f"empty_bin, {seeds(E['EMPTY_SEEDS'])}, np8",
         "its picks", f"held out: test, {seeds(E['HELD_TEST'])}", f"held out: empty_bin, {seeds(E['HELD_EMPTY'])}, np8"],
        rows)
@@ -974,10 +986,12 @@ def t_slurm():
 
 
 def t_verification():
-    head("Verification", "`graspmap eval` with the defaults, `--verify-rejected 0`, `--verify-floor 0.25`, `--verify-top 0`.")
+    head("Verification", "`graspmap eval` with the defaults, `--verify-rejected 0`, `--verify-floor 0.25`, `--verify-square 0`, "
+         "`--verify-strips 2 --verify-square 0` (the planner's rule), `--verify-top 0`.")
     rows, notes = [], []
     base = lambda s: ev(f"model-{s}")
     for tag, label in (("", "defaults"), ("vr0", "`--verify-rejected 0`"), ("vf25", "`--verify-floor 0.25`"),
+                       ("sq0", "`--verify-square 0`"), ("planner", "`--verify-strips 2 --verify-square 0`"),
                        ("vt0", "`--verify-top 0`")):
         g = lambda s: ev(f"model-{s}-{tag}") if tag else base(s)
         rows.append([label, count(g("train")), rate(g("test")), moved(g("enp8"), span=False, lost=False),

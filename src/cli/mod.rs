@@ -223,6 +223,15 @@ pub(crate) struct EvalArgs {
     /// passes (0 = off; default: the same N as --verify-top).
     #[arg(long, value_name = "M")]
     pub(crate) verify_rejected: Option<usize>,
+    /// Model policy: how many of a pad's three strips across its width (outer quarters, middle
+    /// half) the squeezed part must reach to pass verification: 3 = the whole pad, 2 = the
+    /// planner's rule, which also passes grasps near a box's edge (BENCHMARKS.md#verification).
+    #[arg(long, value_name = "N", default_value_t = ModelPolicyConfig::default().verify_strips as u8, value_parser = clap::value_parser!(u8).range(1..=3))]
+    pub(crate) verify_strips: u8,
+    /// Model policy: verification first tries the candidates whose squeezed faces are within
+    /// MM of square across a pad (5 ≈ 13°), then those within the planner's 10 mm (0 = one pass).
+    #[arg(long, value_name = "MM", default_value_t = ModelPolicyConfig::default().verify_square * 1000.0, value_parser = non_negative_up_to(10.0))]
+    pub(crate) verify_square: f32,
     /// Model policy: move the chosen grasp to the middle of the surface under it, turning it to
     /// an angle that fits there if needed (needs `--collision-check full`). Off by default: it
     /// moves more objects in empty_bin but picks fewer training objects (BENCHMARKS.md#centring).

@@ -32,6 +32,16 @@ pub(crate) struct ModelPolicyConfig {
     /// When none of the `verify_top` best allowed actions passes, how many of the best before
     /// the collision check verification looks at next; 0 skips that second pass. Default 200.
     pub(crate) verify_rejected: usize,
+    /// How many of a pad's three strips the squeezed part must reach for a candidate to pass
+    /// verification. Default 3, the whole pad width: the network, unlike the planner, does not
+    /// know where an object's centre is, and in clutter its peak often sits near a box's edge,
+    /// where a grasp that catches two strips lets the box pivot out
+    /// (BENCHMARKS.md#verification).
+    pub(crate) verify_strips: usize,
+    /// Verification first looks for candidates whose squeezed outline shifts by at most this
+    /// much across a pad (m), and only then up to the planner's 10 mm; 0 = one pass at 10 mm.
+    /// Default 5 mm, about 13° off square (BENCHMARKS.md#verification).
+    pub(crate) verify_square: f32,
     /// Move the chosen grasp to the middle of its surface (needs `check` `Full`). Default off.
     pub(crate) centring: bool,
 }
@@ -43,6 +53,8 @@ impl Default for ModelPolicyConfig {
             verify_top: 200,
             verify_floor: 0.0,
             verify_rejected: 200,
+            verify_strips: 3,
+            verify_square: 0.005,
             centring: false,
         }
     }
@@ -146,6 +158,8 @@ impl Policy for ModelPolicy {
             verify_top,
             verify_floor,
             verify_rejected,
+            verify_strips,
+            verify_square,
             centring,
         } = self.config;
         let (camera, frame) = (view.camera, view.frame);
@@ -182,13 +196,27 @@ impl Policy for ModelPolicy {
             // works more often than the allowed argmax that failed. When nothing passes (or
             // nothing above the floor), the argmax is still tried
             // (BENCHMARKS.md#verification).
-            let verifier = Verifier::new(camera, frame, &heights, CheckConfig::default());
-            let passes = |g: PixelGrasp| verifier.assess(g).is_ok();
-            let passed =
+            // Squeezed faces near square come first: a box squeezed 22.5° off its faces slips
+            // out of a cardboard grip (friction 0.3 holds up to about 17°), and the planner's
+            // 10 mm across a pad allows 24°.
+            let planner_slant = CheckConfig::default().max_slant;
+            let mut slants = vec![planner_slant];
+            if verify_square > 0.0 && verify_square < planner_slant {
+                slants.insert(0, verify_square);
+            }
+            let passed = slants.into_iter().find_map(|max_slant| {
+                let config = CheckConfig {
+                    strips: verify_strips,
+                    max_slant,
+                    ..CheckConfig::default()
+                };
+                let verifier = Verifier::new(camera, frame, &heights, config);
+                let passes = |g: PixelGrasp| verifier.assess(g).is_ok();
                 first_verified(maps.ranked(verify_top), verify_floor, passes).or_else(|| {
                     let unchecked = unchecked.as_ref()?;
                     first_verified(unchecked.ranked(verify_rejected), verify_floor, passes)
-                });
+                })
+            });
             verified = Some(passed.is_some());
             if let Some(passed) = passed {
                 choice = passed;

@@ -39,6 +39,9 @@ pub struct CheckConfig {
     pub(crate) margin: f32,
     /// Largest shift of the squeezed outline across a pad's width (m); more is a slanted face.
     pub(crate) max_slant: f32,
+    /// How many of a pad's three strips across its width (the outer quarters and the middle
+    /// half) the squeezed part must reach: fewer lets the pads pivot the object out.
+    pub(crate) strips: usize,
     /// Number of angles tried over 180°.
     pub(crate) angles: u32,
     /// Sampling step along and across the closing line (m).
@@ -49,6 +52,9 @@ pub struct CheckConfig {
 pub(crate) const PLANNING_MARGIN: f32 = 0.006;
 /// Largest shift of the squeezed outline across a pad before a face counts as slanted (m).
 pub(crate) const MAX_SLANT: f32 = 0.010;
+/// The planner's (and labeller's) strips rule: two of three, so that a grasp near an object's
+/// end still counts; the planner also knows the object's centroid and ranks by nearness to it.
+pub(crate) const PLANNER_STRIPS: usize = 2;
 /// Free space under the pads beyond this no longer raises a plan's score (m).
 pub(crate) const CLEARANCE_THAT_COUNTS: f32 = 0.02;
 /// Weight of an off-centre squeeze in a plan's score, against clearance and the distance to
@@ -88,6 +94,7 @@ impl Default for CheckConfig {
             palm_half_across: GRIPPER.palm_half_across,
             margin: PLANNING_MARGIN,
             max_slant: MAX_SLANT,
+            strips: PLANNER_STRIPS,
             angles: PLANNED_ANGLES,
             step: SAMPLING_STEP,
         }
@@ -164,7 +171,7 @@ named_enum! {
         Palm = "palm", "palm would hit something",
         /// The jaw would close on air.
         NothingBetweenPads = "nothing_between_pads", "nothing between the pads",
-        /// The squeezed part reaches fewer than two of a pad's strips.
+        /// The squeezed part reaches fewer of a pad's strips than asked.
         Edge = "edge", "pads would only catch an edge",
         /// The squeezed outline shifts too much across a pad.
         Slanted = "slanted", "faces slanted to the jaw",
@@ -349,7 +356,7 @@ pub(crate) fn check_grasp(
         return Err(Rejection::NothingBetweenPads);
     }
     // A grasp whose pads only catch the object's edge lets it pivot out.
-    if covered.iter().filter(|&&c| c).count() < 2 {
+    if covered.iter().filter(|&&c| c).count() < config.strips {
         return Err(Rejection::Edge);
     }
     if !pads_in_view(camera, frame, &target, config) {
@@ -380,7 +387,7 @@ pub(crate) fn check_grasp(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::policy::synthetic::floor_frame;
+    use crate::policy::synthetic::{block_frame, floor_frame};
 
     /// A grasp across the middle of a 26 mm block, the cloud the camera sees, and the checks
     /// with one more surface point at (`along`, `across`) from the TCP, `above` its height.
@@ -432,5 +439,30 @@ mod tests {
         // Beyond the margin beside the pad nothing is touched.
         let clear_of_pad = config.pad_width / 2.0 + config.margin * 1.5;
         assert!(with_extra_point(inside_margin, clear_of_pad, 0.01).is_ok());
+    }
+
+    #[test]
+    fn a_grasp_on_a_blocks_last_row_catches_two_strips_and_fails_when_three_are_asked() {
+        let camera = Camera::top_down();
+        // 3 columns along the closing line (it fits the jaw), 7 rows across it.
+        let frame = block_frame(&camera, Some([1, 3]));
+        let heights = HeightMap::new(&camera, &frame);
+        let check = |row: u32, strips: usize| {
+            let config = CheckConfig {
+                strips,
+                ..CheckConfig::default()
+            };
+            let grasp = PixelGrasp {
+                u: 64,
+                v: row,
+                angle_deg: 0.0,
+            };
+            Verifier::new(&camera, &frame, &heights, config).assess(grasp)
+        };
+        assert!(check(64, 3).is_ok(), "{:?}", check(64, 3));
+        // On the last row the block lies on one side of the closing line only: the middle
+        // strip and one outer quarter.
+        assert!(check(67, 2).is_ok(), "{:?}", check(67, 2));
+        assert_eq!(check(67, 3), Err(Rejection::Edge));
     }
 }

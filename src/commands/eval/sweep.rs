@@ -182,6 +182,8 @@ pub(super) fn resolved_config(
         "verify_top": model.then_some(config.model.verify_top),
         "verify_floor": model.then_some(config.model.verify_floor),
         "verify_rejected": model.then_some(config.model.verify_rejected),
+        "verify_strips": model.then_some(config.model.verify_strips),
+        "verify_square": model.then_some(config.model.verify_square),
         "centring": model && config.model.centring,
         "max_attempts": config.max_attempts,
         "give_up_after": config.give_up_after,
