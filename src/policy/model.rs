@@ -204,6 +204,9 @@ impl Policy for ModelPolicy {
             if verify_square > 0.0 && verify_square < planner_slant {
                 slants.insert(0, verify_square);
             }
+            // Each pass ranks the same maps: rank them once, the second pass's only if asked.
+            let ranked = maps.ranked(verify_top);
+            let ranked_unchecked = std::cell::OnceCell::new();
             let passed = slants.into_iter().find_map(|max_slant| {
                 let config = CheckConfig {
                     strips: verify_strips,
@@ -212,9 +215,10 @@ impl Policy for ModelPolicy {
                 };
                 let verifier = Verifier::new(camera, frame, &heights, config);
                 let passes = |g: PixelGrasp| verifier.assess(g).is_ok();
-                first_verified(maps.ranked(verify_top), verify_floor, passes).or_else(|| {
+                first_verified(ranked.clone(), verify_floor, passes).or_else(|| {
                     let unchecked = unchecked.as_ref()?;
-                    first_verified(unchecked.ranked(verify_rejected), verify_floor, passes)
+                    let second = ranked_unchecked.get_or_init(|| unchecked.ranked(verify_rejected));
+                    first_verified(second.clone(), verify_floor, passes)
                 })
             });
             verified = Some(passed.is_some());
