@@ -244,6 +244,10 @@ pub(crate) struct EvalArgs {
     /// bin done (0 = never: the reference's fixed budget of --max-attempts).
     #[arg(long, value_name = "K", default_value_t = 0)]
     pub(crate) give_up_after: u32,
+    /// Model policy: where no grasp passes verification, push the object under the best one
+    /// off its neighbours instead; an attempt, not a grasp (docs/evaluation.md, "Pushing").
+    #[arg(long)]
+    pub(crate) push_unverified: bool,
     /// Write the episode video: an oblique view beside the camera view with the chosen grasp
     /// (one seed only); .mp4 for H.264 (small, plays in browsers) or .gif.
     #[arg(long, value_name = "VIDEO")]

@@ -105,6 +105,7 @@ impl EvalArgs {
             model,
             max_attempts: self.max_attempts,
             give_up_after: self.give_up_after,
+            push_unverified: self.push_unverified,
             record: self.record,
             resume: self.resume,
             check_invariants: self.check_invariants,

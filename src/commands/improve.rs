@@ -230,6 +230,7 @@ fn evaluate(
         model: ModelPolicyConfig::default(),
         max_attempts: 25,
         give_up_after: 0,
+        push_unverified: false,
         record: None,
         resume: false,
         check_invariants: false,

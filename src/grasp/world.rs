@@ -23,6 +23,24 @@ pub struct WorldGrasp {
     pub closing: Vector,
 }
 
+/// A push in world terms: the closed hand lowered at `start` and driven in a straight line to
+/// `end`, both TCP positions at the same height.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WorldPush {
+    /// Where the TCP goes down.
+    pub start: Vector,
+    /// Where the stroke ends.
+    pub end: Vector,
+}
+
+impl WorldPush {
+    /// Unit horizontal direction of the stroke.
+    pub fn direction(&self) -> Vector {
+        let d = self.end - self.start;
+        Vector::new(d.x, d.y, 0.0).normalize()
+    }
+}
+
 /// World direction of the image line at `angle_deg` through the camera's image plane, flattened
 /// onto the horizontal: image x runs along the camera's right axis, image y along its down axis.
 pub fn closing_direction(camera: &Camera, angle_deg: f32) -> Vector {

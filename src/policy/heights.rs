@@ -38,6 +38,22 @@ impl HeightMap {
         self.points[(v * self.size + u) as usize].z
     }
 
+    /// Side length of the square image (px).
+    pub(crate) fn size(&self) -> u32 {
+        self.size
+    }
+
+    /// Every pixel, row by row.
+    pub(crate) fn pixels(&self) -> impl Iterator<Item = (u32, u32)> {
+        let size = self.size;
+        (0..size).flat_map(move |v| (0..size).map(move |u| (u, v)))
+    }
+
+    /// The world point seen at pixel (`u`, `v`).
+    pub(crate) fn point(&self, u: u32, v: u32) -> Vector {
+        self.points[(v * self.size + u) as usize]
+    }
+
     /// The surface height seen where `p` projects; `None` outside the image.
     pub(crate) fn under(&self, camera: &Camera, p: Vector) -> Option<f32> {
         let [u, v, _] = camera.project(p)?;

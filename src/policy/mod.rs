@@ -10,6 +10,7 @@ pub(crate) mod collision;
 pub mod heights;
 pub(crate) mod model;
 pub mod oracle;
+pub mod push;
 pub(crate) mod suppression;
 #[cfg(test)]
 pub(crate) mod synthetic;

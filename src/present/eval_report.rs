@@ -169,6 +169,11 @@ pub(crate) fn summarise(
 ) -> EvalResults {
     let all: Vec<&AttemptRecord> = runs.iter().flat_map(|r| &r.attempts).collect();
     let successes = all.iter().filter(|a| a.success).count();
+    // A push is an attempt but not a grasp: pick success counts grasps, as VPG's does.
+    let grasps = all
+        .iter()
+        .filter(|a| a.reason != PickReason::Pushed)
+        .count();
     let per_object = if task == Task::EmptyBin {
         Vec::new()
     } else {
@@ -206,7 +211,7 @@ pub(crate) fn summarise(
         task,
         policy,
         seeds,
-        success: Rate::new(successes, all.len()),
+        success: Rate::new(successes, grasps),
         per_object,
         moved: spread_of(|b| b.moved),
         left: spread_of(|b| b.left),
@@ -329,18 +334,24 @@ pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
         }
         lines.push(format!("success rate: {}", results.success.describe()));
     }
-    let unverified: Vec<&AttemptRecord> = results
+    let (pushed, unverified): (Vec<&AttemptRecord>, Vec<&AttemptRecord>) = results
         .runs
         .iter()
         .flat_map(|r| &r.attempts)
         .filter(|a| a.verified == Some(false))
-        .collect();
+        .partition(|a| a.reason == PickReason::Pushed);
     if !unverified.is_empty() {
         // These are where a failure is most likely (docs/evaluation.md, "Verification").
         lines.push(format!(
             "unverified: {} executed the argmax as nothing passed verification; {} succeeded",
             counted(unverified.len(), "attempt"),
             unverified.iter().filter(|a| a.success).count()
+        ));
+    }
+    if !pushed.is_empty() {
+        lines.push(format!(
+            "pushed: {} pushed where nothing passed verification; pick success leaves them out",
+            counted(pushed.len(), "attempt"),
         ));
     }
     let t = &results.timing;

@@ -9,6 +9,7 @@ pub(crate) mod kinematics;
 mod penetration;
 pub mod pick;
 mod place;
+pub mod push;
 pub(crate) mod robot;
 mod shapes;
 mod stepping;

@@ -72,6 +72,9 @@ named_enum! {
         IkUnreachable = "ik_unreachable", "no IK solution along the path",
         /// The planner found no feasible grasp (reported by planners, not by execution).
         Ungraspable = "ungraspable", "the planner found no feasible grasp",
+        /// No grasp passed the checks, so the hand pushed instead of grasping (not a grasp
+        /// attempt: pick success leaves it out).
+        Pushed = "pushed", "no grasp passed the checks, so the hand pushed instead",
     }
 }
 
@@ -127,14 +130,7 @@ impl Workcell {
 
     fn pick_inner(&mut self, grasp: &WorldGrasp) -> PickOutcome {
         let ur5 = Ur5::new(to_isometry(&Pose::from_translation(super::ROBOT_BASE)));
-        let grasp_tool0 = |tcp: Vector, closing: Vector| {
-            // Tool z points down; fingers slide along tool y = the closing direction.
-            let z = Vector::new(0.0, 0.0, -1.0);
-            let y = closing;
-            let x = y.cross(z);
-            let rotation = Rotation::from_mat3(&rapier3d::glamx::Mat3::from_cols(x, y, z));
-            Pose::from_parts(tcp + Vector::new(0.0, 0.0, GRIPPER.tcp_offset), rotation)
-        };
+        let grasp_tool0 = tool0_for;
         let above = grasp.tcp + Vector::new(0.0, 0.0, APPROACH_HEIGHT);
         // The jaw is symmetric: take whichever of ±closing needs less wrist travel.
         let current = self.arm.joints;
@@ -283,7 +279,7 @@ impl Workcell {
 
     /// After a failed attempt: back a little straight up, open, back further up, and return home,
     /// without collision stops.
-    fn recover(&mut self) {
+    pub(super) fn recover(&mut self) {
         self.enter("recover");
         let ur5 = Ur5::new(to_isometry(&Pose::from_translation(super::ROBOT_BASE)));
         // Relieve first, as a robot does after a protective stop: a pad left pressing on an
@@ -467,7 +463,18 @@ impl Workcell {
     }
 }
 
-fn joint_distance(a: &Joints, b: &Joints) -> f64 {
+/// The tool0 pose that puts the TCP at `tcp`, pointing straight down, with the fingers sliding
+/// along the horizontal `closing` direction.
+pub(super) fn tool0_for(tcp: Vector, closing: Vector) -> Pose {
+    // Tool z points down; fingers slide along tool y = the closing direction.
+    let z = Vector::new(0.0, 0.0, -1.0);
+    let y = closing;
+    let x = y.cross(z);
+    let rotation = Rotation::from_mat3(&rapier3d::glamx::Mat3::from_cols(x, y, z));
+    Pose::from_parts(tcp + Vector::new(0.0, 0.0, GRIPPER.tcp_offset), rotation)
+}
+
+pub(super) fn joint_distance(a: &Joints, b: &Joints) -> f64 {
     a.iter()
         .zip(b)
         .map(|(x, y)| (x - y).powi(2))

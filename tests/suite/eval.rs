@@ -296,6 +296,59 @@ fn empty_bin_counts_moved_left_and_lost_every_attempt() {
 }
 
 #[test]
+fn push_unverified_pushes_where_nothing_verifies_and_pick_success_counts_only_grasps() {
+    // All fifteen objects, and only the argmax verified: the untrained network's best grasp in
+    // the pile fails the checks within a few attempts.
+    let setup = Setup::new();
+    let bundled = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/objects/split.json"),
+    )
+    .unwrap();
+    std::fs::write(setup.path("split.json"), bundled).unwrap();
+    let json = setup.path("eval.json");
+    let args = [
+        "eval",
+        "--task",
+        "empty_bin",
+        "--max-attempts",
+        "3",
+        "--verify-top",
+        "1",
+    ];
+    let out = setup.run(
+        &[
+            &args[..],
+            &["--push-unverified", "--json", json.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    assert_ok(&out);
+    let report = read_json(&json);
+    assert_eq!(report["config"]["push_unverified"], true);
+    let results = &report["results"];
+    let attempts = results["runs"][0]["attempts"].as_array().unwrap();
+    let pushes: Vec<&Value> = attempts
+        .iter()
+        .filter(|a| a["reason"] == "pushed")
+        .collect();
+    // The untrained network's best grasps land on bare floor or on both objects at once.
+    assert!(!pushes.is_empty(), "no push: {attempts:?}");
+    for push in &pushes {
+        assert_eq!(push["verified"], false, "{push}");
+        assert_eq!(push["success"], false, "{push}");
+        let detail = push["detail"].as_str().unwrap();
+        assert!(detail.starts_with("push"), "{push}");
+    }
+    assert_eq!(
+        results["success"]["trials"].as_u64().unwrap() as usize,
+        attempts.len() - pushes.len()
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let line = format!("pushed: {} attempt", pushes.len());
+    assert!(stdout.contains(&line), "{line:?} missing from {stdout}");
+}
+
+#[test]
 fn give_up_after_ends_a_scene_on_its_first_run_of_failures() {
     let setup = Setup::new();
     let json = setup.path("eval.json");

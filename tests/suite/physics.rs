@@ -10,6 +10,7 @@ use graspmap::grasp::world::{
 use graspmap::grasp::PixelGrasp;
 use graspmap::policy::heights::HeightMap;
 use graspmap::policy::oracle;
+use graspmap::policy::push::plan_push;
 use graspmap::policy::verify::{CheckConfig, Verifier};
 use graspmap::sim::pick::{PickOutcome, PickReason};
 use graspmap::sim::{ObjectLocation, Workcell};
@@ -272,6 +273,53 @@ fn the_depth_test_passes_a_grasp_across_a_lying_can_and_vetoes_one_along_it_or_b
             ..across
         })
         .is_err());
+}
+
+#[test]
+fn a_push_slides_a_brick_off_the_box_beside_it_and_keeps_both_in_the_bin() {
+    // A foam brick with a gelatin box a finger's width away: the jaw fits round neither side.
+    let mut cell = Workcell::new(&Default::default()).unwrap();
+    let brick = cell
+        .add_object(
+            &model("YcbFoamBrick"),
+            Pose::from_translation(Vector::new(0.5, 0.0, FLOOR_TOP + 0.028)),
+        )
+        .unwrap();
+    let gelatin = cell
+        .add_object(
+            &model("YcbGelatinBox"),
+            Pose::from_translation(Vector::new(0.5, 0.075, FLOOR_TOP + 0.02)),
+        )
+        .unwrap();
+    cell.settle(3.0);
+    let camera = Camera::top_down();
+    let frame = cell.capture();
+    let [u, v, _] = camera.project(cell.object_pose(brick).translation).unwrap();
+    let grasp = PixelGrasp {
+        u: u as u32,
+        v: v as u32,
+        angle_deg: 0.0,
+    };
+    let push = plan_push(&HeightMap::new(&camera, &frame), grasp).expect("free floor round it");
+    let apart = |cell: &Workcell| {
+        let d = cell.object_pose(brick).translation - cell.object_pose(gelatin).translation;
+        Vector::new(d.x, d.y, 0.0).length()
+    };
+    let (gap_before, brick_before) = (apart(&cell), cell.object_pose(brick).translation);
+    let outcome = cell.push(&push);
+    assert!(outcome.completed, "{outcome:?}");
+    let moved = cell.object_pose(brick).translation - brick_before;
+    let along = moved.dot(push.direction());
+    assert!(along > 0.03, "the brick moved {moved:?} for {push:?}");
+    assert!(
+        apart(&cell) > gap_before + 0.02,
+        "{} -> {}",
+        gap_before,
+        apart(&cell)
+    );
+    for object in [brick, gelatin] {
+        assert_eq!(cell.locate(object), ObjectLocation::Bin1);
+    }
 }
 
 #[test]

@@ -38,6 +38,8 @@ pub(crate) struct EvalConfig {
     pub(crate) max_attempts: u32,
     /// empty_bin: end a scene after this many failed attempts in a row; 0 = never.
     pub(crate) give_up_after: u32,
+    /// Model policy: push instead of executing a grasp that failed verification.
+    pub(crate) push_unverified: bool,
     /// Where to write the episode video (one seed only).
     pub(crate) record: Option<PathBuf>,
     /// Skip the scenes that the `--json` report already holds.

@@ -21,7 +21,9 @@ use crate::interrupt;
 use crate::model::inference::AffordanceModel;
 use crate::named::{counted, Named};
 use crate::policy::baselines::{OraclePolicy, RandomPolicy};
+use crate::policy::heights::HeightMap;
 use crate::policy::model::ModelPolicy;
+use crate::policy::push::plan_push;
 use crate::policy::suppression::{Suppression, SuppressionConfig};
 use crate::policy::PolicyKind;
 use crate::policy::{Observation, Policy};
@@ -51,6 +53,7 @@ struct Evaluation<'a> {
     per_seed_vis: bool,
     max_attempts: u32,
     give_up_after: u32,
+    push_unverified: bool,
     recording: Option<Vec<RgbImage>>,
     bar: indicatif::ProgressBar,
     check_invariants: bool,
@@ -103,6 +106,7 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         per_seed_vis: config.seeds.len() > 1,
         max_attempts: config.max_attempts,
         give_up_after: config.give_up_after,
+        push_unverified: config.push_unverified,
         recording: config.record.as_ref().map(|_| Vec::new()),
         bar: context.progress_bar("attempts", per_scene * seeds.len() as u64, 0),
         check_invariants: config.check_invariants,
@@ -403,9 +407,19 @@ impl Evaluation<'_> {
             cell.start_recording(EPISODE_EVERY_STEPS);
         }
         let sim_start = Instant::now();
-        let outcome = match &decision.grasp {
-            Ok(g) => cell.pick(&world_grasp(&camera, &frame, *g)),
-            Err(why) => PickOutcome::failure(PickReason::Ungraspable, why.to_string()),
+        let push = match (&decision.grasp, decision.verified) {
+            (Ok(g), Some(false)) if self.push_unverified => {
+                plan_push(&HeightMap::new(&camera, &frame), *g)
+            }
+            _ => None,
+        };
+        let outcome = match (&decision.grasp, push) {
+            (_, Some(push)) => {
+                let pushed = cell.push(&push);
+                PickOutcome::failure(PickReason::Pushed, pushed.detail)
+            }
+            (Ok(g), None) => cell.pick(&world_grasp(&camera, &frame, *g)),
+            (Err(why), None) => PickOutcome::failure(PickReason::Ungraspable, why.to_string()),
         };
         let sim = sim_start.elapsed().as_secs_f64();
         if let Some(frames) = &mut self.recording {

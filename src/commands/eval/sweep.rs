@@ -187,6 +187,7 @@ pub(super) fn resolved_config(
         "centring": model && config.model.centring,
         "max_attempts": config.max_attempts,
         "give_up_after": config.give_up_after,
+        "push_unverified": model && config.push_unverified,
         "attempts_per_object": ATTEMPTS_PER_OBJECT,
         "objects": names,
         "workcell": WorkcellConfig::default(),
