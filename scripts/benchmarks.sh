@@ -331,6 +331,7 @@ t_trials() {
     for name in enp8 henp8; do
       spec_args "$name"
       eval_into "$d/eval/$tag-$name-giveup6.json" "$d/data" --checkpoint "$ck" "${spec[@]}" --give-up-after 6
+      eval_into "$d/eval/$tag-$name-push.json" "$d/data" --checkpoint "$ck" "${spec[@]}" --push-unverified
     done
   done
   ev oracle enp8
@@ -961,6 +962,8 @@ def t_trials():
                          rate(g("enp8" + argmax)), rate(g("htest" + argmax)), moved(g("henp8" + argmax))])
         rows.append([("labels only" if i == 0 else f"round {i}") + ", `--give-up-after 6`", DASH, DASH, DASH,
                      moved(g("enp8-giveup6")), rate(g("enp8-giveup6")), DASH, moved(g("henp8-giveup6"))])
+        rows.append([("labels only" if i == 0 else f"round {i}") + ", `--push-unverified`", DASH, DASH, DASH,
+                     moved(g("enp8-push")), rate(g("enp8-push")), DASH, moved(g("henp8-push"))])
     rows.append(["oracle, np8", DASH, DASH, DASH, moved(ev("oracle-enp8")), rate(ev("oracle-enp8")), DASH,
                  moved(ev("oracle-henp8"))])
     rows.append(["oracle, np8, `--give-up-after 6`", DASH, DASH, DASH, moved(ev("oracle-enp8-giveup6")),
