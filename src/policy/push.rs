@@ -189,31 +189,8 @@ fn inside(tote: &Tote, p: Vector, margin: f32) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::policy::synthetic::blocks_frame;
     use crate::vision::camera::Camera;
-    use crate::vision::render::Frame;
-
-    /// A top-down frame of the tote floor with 5 cm tall blocks, each [u0, u1, v0, v1] inclusive.
-    fn blocks_frame(camera: &Camera, blocks: &[[u32; 4]]) -> Frame {
-        let mut depth = Vec::new();
-        for v in 0..128u32 {
-            for u in 0..128u32 {
-                let on = blocks
-                    .iter()
-                    .any(|b| (b[0]..=b[1]).contains(&u) && (b[2]..=b[3]).contains(&v));
-                let z = if on { FLOOR_TOP + 0.05 } else { FLOOR_TOP };
-                let far = camera.pixel_to_world(u, v, 1.0);
-                let eye = camera.eye();
-                depth.push((eye.z - z) / (eye.z - far.z));
-            }
-        }
-        Frame {
-            width: 128,
-            height: 128,
-            rgb: vec![0; 3 * 128 * 128],
-            depth,
-            mask: vec![0; 128 * 128],
-        }
-    }
 
     fn grasp_at(u: u32, v: u32) -> PixelGrasp {
         PixelGrasp {

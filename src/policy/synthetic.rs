@@ -11,11 +11,21 @@ pub(crate) fn floor_frame(camera: &Camera, block_half: Option<u32>) -> Frame {
 
 /// Like [`floor_frame`], with a block of [`half columns, half rows`] pixels.
 pub(crate) fn block_frame(camera: &Camera, block_half: Option<[u32; 2]>) -> Frame {
+    let blocks: Vec<[u32; 4]> = block_half
+        .map(|[hu, hv]| [64 - hu, 64 + hu, 64 - hv, 64 + hv])
+        .into_iter()
+        .collect();
+    blocks_frame(camera, &blocks)
+}
+
+/// The tote floor with 5 cm tall blocks, each [first column, last column, first row, last row].
+pub(crate) fn blocks_frame(camera: &Camera, blocks: &[[u32; 4]]) -> Frame {
     let mut depth = Vec::new();
     for v in 0..128u32 {
         for u in 0..128u32 {
-            let on_block =
-                block_half.is_some_and(|[hu, hv]| u.abs_diff(64) <= hu && v.abs_diff(64) <= hv);
+            let on_block = blocks
+                .iter()
+                .any(|b| (b[0]..=b[1]).contains(&u) && (b[2]..=b[3]).contains(&v));
             let z = if on_block { 0.07 } else { 0.02 };
             // The depth at which pixel (u, v)'s ray meets height z.
             let far = camera.pixel_to_world(u, v, 1.0);

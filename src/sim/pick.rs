@@ -132,25 +132,9 @@ impl Workcell {
         let ur5 = Ur5::new(to_isometry(&Pose::from_translation(super::ROBOT_BASE)));
         let grasp_tool0 = tool0_for;
         let above = grasp.tcp + Vector::new(0.0, 0.0, APPROACH_HEIGHT);
-        // The jaw is symmetric: take whichever of ±closing needs less wrist travel.
-        let current = self.arm.joints;
-        let candidates = [grasp.closing, -grasp.closing].map(|c| {
-            let pose = grasp_tool0(above, c);
-            ur5.inverse(&to_isometry(&pose), &current)
-                .map(|q| (q, c, joint_distance(&q, &current)))
-        });
-        let (approach_q, closing) = match candidates {
-            [Ok(a), Ok(b)] => {
-                if a.2 <= b.2 {
-                    (a.0, a.1)
-                } else {
-                    (b.0, b.1)
-                }
-            }
-            [Ok(a), Err(_)] | [Err(_), Ok(a)] => (a.0, a.1),
-            [Err(e), Err(_)] => {
-                return PickOutcome::failure(PickReason::IkUnreachable, e.to_string())
-            }
+        let (approach_q, closing) = match self.approach(&ur5, above, grasp.closing) {
+            Ok(approach) => approach,
+            Err(e) => return PickOutcome::failure(PickReason::IkUnreachable, e.to_string()),
         };
 
         let heights_before: Vec<f32> = (0..self.objects.len())
@@ -200,6 +184,26 @@ impl Workcell {
         };
         let lift_at_home = self.lift_of(held, &heights_before);
         self.place(held, lift_at_home)
+    }
+
+    /// The joints that put the TCP at `above` with the fingers along ±`closing`, and that
+    /// direction: the jaw is symmetric, so whichever sign needs less wrist travel.
+    pub(super) fn approach(
+        &self,
+        ur5: &Ur5,
+        above: Vector,
+        closing: Vector,
+    ) -> Result<(Joints, Vector), IkError> {
+        let current = self.arm.joints;
+        let candidates = [closing, -closing].map(|c| {
+            ur5.inverse(&to_isometry(&tool0_for(above, c)), &current)
+                .map(|q| (q, c, joint_distance(&q, &current)))
+        });
+        match candidates {
+            [Ok(a), Ok(b)] => Ok(if a.2 <= b.2 { (a.0, a.1) } else { (b.0, b.1) }),
+            [Ok(a), Err(_)] | [Err(_), Ok(a)] => Ok((a.0, a.1)),
+            [Err(e), Err(_)] => Err(e),
+        }
     }
 
     fn trace(&self, phase: &str) {
@@ -474,7 +478,7 @@ pub(super) fn tool0_for(tcp: Vector, closing: Vector) -> Pose {
     Pose::from_parts(tcp + Vector::new(0.0, 0.0, GRIPPER.tcp_offset), rotation)
 }
 
-pub(super) fn joint_distance(a: &Joints, b: &Joints) -> f64 {
+fn joint_distance(a: &Joints, b: &Joints) -> f64 {
     a.iter()
         .zip(b)
         .map(|(x, y)| (x - y).powi(2))

@@ -54,22 +54,7 @@ impl Workcell {
         // palm reaches least far ahead and behind the fingers, towards the walls.
         let direction = push.direction().cross(Vector::Z);
         let above = push.start + Vector::new(0.0, 0.0, APPROACH_HEIGHT);
-        let current = self.arm.joints;
-        let candidates = [direction, -direction].map(|d| {
-            ur5.inverse(&to_isometry(&tool0_for(above, d)), &current)
-                .map(|q| (q, d, super::pick::joint_distance(&q, &current)))
-        });
-        let (approach_q, closing) = match candidates {
-            [Ok(a), Ok(b)] => {
-                if a.2 <= b.2 {
-                    (a.0, a.1)
-                } else {
-                    (b.0, b.1)
-                }
-            }
-            [Ok(a), Err(_)] | [Err(_), Ok(a)] => (a.0, a.1),
-            [Err(e), Err(_)] => return Err(Stop::Ik(e)),
-        };
+        let (approach_q, closing) = self.approach(&ur5, above, direction).map_err(Stop::Ik)?;
         let guard = Guard { objects: true };
         self.enter("push");
         self.gripper.close(&mut self.world);
