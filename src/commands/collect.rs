@@ -8,14 +8,14 @@ use anyhow::{bail, Context as _};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::Context;
+use super::{workers, Context};
 use crate::assets::objects::ObjectModel;
 use crate::data::lock::StoreLock;
 use crate::data::output::check_output_dir;
 use crate::data::trials::{Manifest, SceneTrials, Shard, Trial, TrialStore};
 use crate::grasp::angle_bin;
 use crate::grasp::world::world_grasp;
-use crate::interrupt::{self, Interrupted};
+use crate::interrupt;
 use crate::model::checkpoint::file_sha256;
 use crate::model::inference::AffordanceModel;
 use crate::model::unet::Precision;
@@ -98,7 +98,6 @@ struct Policies {
 /// Runs the command.
 pub(crate) fn run(context: &Context, config: CollectConfig) -> anyhow::Result<()> {
     let start = Instant::now();
-    crate::model::use_threads(context.threads);
     let split = context.split()?;
     let names = split.train.clone();
     if config.clutter > names.len() {
@@ -112,15 +111,20 @@ pub(crate) fn run(context: &Context, config: CollectConfig) -> anyhow::Result<()
     // Test objects are never loaded: a trial can only ever show training objects.
     let models = context.objects.load_all(&names)?;
     let uses_model = matches!(config.policy, CollectPolicy::Model | CollectPolicy::Mix);
-    let policies = Policies {
-        model: match uses_model {
-            true => Some(ModelPolicy::new(
-                AffordanceModel::load(&config.checkpoint, config.precision)?,
-                config.model,
-            )?),
-            false => None,
-        },
+    let policies = || -> anyhow::Result<Policies> {
+        Ok(Policies {
+            model: match uses_model {
+                true => Some(ModelPolicy::new(
+                    AffordanceModel::load(&config.checkpoint, config.precision)?,
+                    config.model,
+                )?),
+                false => None,
+            },
+        })
     };
+    // A missing or wrong checkpoint is reported before anything starts; each thread then
+    // loads its own copy.
+    policies()?;
     let settings = settings(context, &config, &names, uses_model)?;
     let store = TrialStore::new(&config.out);
     check_output_dir(store.dir(), "the trial store")?;
@@ -148,26 +152,39 @@ pub(crate) fn run(context: &Context, config: CollectConfig) -> anyhow::Result<()
         ));
     }
     let bar = context.progress_bar("scenes", mine.len() as u64, done);
-    let mut interrupted: Option<Interrupted> = None;
+    let mut todo = Vec::new();
     for &scene in &mine {
-        if store
+        if !store
             .load_scene(scene)?
             .is_some_and(|record| record.complete)
         {
-            continue;
-        }
-        match collect_scene(&store, &config, &policies, &models, scene, &bar)? {
-            true => bar.inc(1),
-            false => {
-                interrupted = interrupt::requested();
-                break;
-            }
+            todo.push(scene);
         }
     }
+    let (workers, network_threads) = workers::plan(context.threads, todo.len());
+    crate::model::use_threads(network_threads);
+    let mut finished = 0;
+    workers::run_in_order(
+        &todo,
+        workers,
+        || {
+            crate::model::use_threads(network_threads);
+            policies()
+        },
+        |policies, &scene| {
+            let complete = collect_scene(&store, &config, policies, &models, scene, &bar)?;
+            Ok(complete.then_some(()))
+        },
+        |()| {
+            finished += 1;
+            bar.inc(1);
+        },
+    )?;
+    let interrupted = interrupt::requested().filter(|_| finished < todo.len());
     bar.finish_and_clear();
     if let Some(interrupted) = interrupted {
         context.say(&format!(
-            "{interrupted}: {} keeps every finished attempt; rerun the same command to continue (the unfinished scene is redone from its seed)",
+            "{interrupted}: {} keeps every finished attempt; rerun the same command to continue (unfinished scenes are redone from their seeds)",
             store.dir().display()
         ));
         return Err(interrupted.into());

@@ -188,6 +188,7 @@ fn merge_reports(context: &Context, config: &MergeConfig) -> anyhow::Result<()> 
     crate::data::output::check_output_file(&config.out, "--out")?;
     let mut runs: Vec<SceneRun> = Vec::new();
     let mut total_wall = 0.0;
+    let mut workers = 1;
     for shard in &shards {
         let expected: Vec<u64> = sweep
             .iter()
@@ -216,6 +217,11 @@ fn merge_reports(context: &Context, config: &MergeConfig) -> anyhow::Result<()> 
         total_wall += shard.value["results"]["timing"]["total_wall"]
             .as_f64()
             .unwrap_or(0.0);
+        workers = workers.max(
+            shard.value["results"]["timing"]["workers"]
+                .as_u64()
+                .map_or(1, |w| w as usize),
+        );
         runs.extend(mine);
     }
     runs.sort_by_key(|r| sweep.iter().position(|&s| s == r.seed));
@@ -228,6 +234,7 @@ fn merge_reports(context: &Context, config: &MergeConfig) -> anyhow::Result<()> 
         .with_context(|| format!("{}: config.objects", first.path.display()))?;
     let seeds: Vec<u64> = runs.iter().map(|r| r.seed).collect();
     let mut results = summarise(task, policy, seeds, &names, runs, total_wall, false);
+    results.timing.workers = workers;
     results.vis_dir = serde_json::from_value(first.value["results"]["vis_dir"].clone())
         .ok()
         .flatten();

@@ -11,6 +11,7 @@ pub(crate) mod predict;
 pub(crate) mod report;
 pub(crate) mod scene;
 pub(crate) mod train;
+pub(crate) mod workers;
 
 use std::path::{Path, PathBuf};
 

@@ -5,8 +5,8 @@
 //! holds), then one folder per scene, `scene_NNNNNN/`, holding `trials.json` and each attempt's
 //! `AA_rgb.png` and `AA_depth.png`. A scene is the unit of work and of resume: its `trials.json`
 //! is rewritten atomically after every attempt and says `"complete": true` after its last, so a
-//! killed run leaves whole attempts, and the next run redoes only the one unfinished scene (from
-//! its seed, to the same bytes). Shards hold disjoint scenes, so merging is copying folders.
+//! killed run leaves whole attempts, and the next run redoes only the unfinished scenes (one per
+//! thread, each from its seed, to the same bytes). Shards hold disjoint scenes, so merging is copying folders.
 
 use std::path::{Path, PathBuf};
 

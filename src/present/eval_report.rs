@@ -226,6 +226,7 @@ pub(crate) fn summarise(
             },
             median_wall: median(&walls),
             total_wall,
+            workers: 1,
         },
         runs,
         interrupted,
@@ -356,14 +357,21 @@ pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
     }
     let t = &results.timing;
     lines.push(format!(
-        "per attempt: {:.2} s wall (median {:.2}) = sim {:.2} + render {:.3} + network {:.3} + other {:.3}; total {:.1} s",
+        "per attempt: {:.2} s wall (median {:.2}) = sim {:.2} + render {:.3} + network {:.3} + other {:.3}; total {:.1} s{}",
         t.mean.wall,
         t.median_wall,
         t.mean.sim,
         t.mean.render,
         t.mean.network,
         (t.mean.wall - t.mean.sim - t.mean.render - t.mean.network).max(0.0),
-        t.total_wall
+        t.total_wall,
+        match t.workers {
+            0 | 1 => String::new(),
+            n => format!(
+                ", {:.2} s per attempt with {n} at once",
+                t.total_wall / t.attempts.max(1) as f64
+            ),
+        }
     ));
     lines
 }
@@ -379,4 +387,12 @@ pub(crate) struct TimingSummary {
     pub(crate) median_wall: f64,
     /// Wall seconds of the whole evaluation.
     pub(crate) total_wall: f64,
+    /// Threads that ran scenes (or single-object attempts) side by side; 1 when they ran one
+    /// after another.
+    #[serde(default = "one_worker")]
+    pub(crate) workers: usize,
+}
+
+fn one_worker() -> usize {
+    1
 }

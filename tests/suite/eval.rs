@@ -89,8 +89,8 @@ fn assert_timing_adds_up(timing: &Value) {
 }
 
 /// The results' `timing` summary against every attempt of every run: their count, the mean of
-/// each part, the median wall time, and a total that holds every attempt (they run one after
-/// another inside it).
+/// each part, the median wall time, and a total that holds every attempt (they run inside it,
+/// at most `workers` at a time).
 fn assert_summary_matches(results: &Value) {
     let summary = &results["timing"];
     let attempts: Vec<&Value> = results["runs"]
@@ -131,9 +131,11 @@ fn assert_summary_matches(results: &Value) {
         "median_wall {median_wall} of {walls:?}"
     );
     let total_wall = summary["total_wall"].as_f64().unwrap();
+    let workers = summary["workers"].as_f64().unwrap();
+    assert!(workers >= 1.0, "{summary}");
     assert!(
-        total_wall + CLOCK_SLACK >= walls.iter().sum::<f64>(),
-        "total_wall {total_wall} is less than the attempts' walls {walls:?}"
+        total_wall * workers + CLOCK_SLACK >= walls.iter().sum::<f64>(),
+        "total_wall {total_wall} on {workers} workers is less than the attempts' walls {walls:?}"
     );
 }
 
@@ -146,8 +148,8 @@ fn decisions(report: &Value) -> Vec<String> {
         .flat_map(|run| run["attempts"].as_array().unwrap().clone())
         .map(|a| {
             format!(
-                "{} {} {} {}",
-                a["drop_seed"], a["grasp"], a["reason"], a["held"]
+                "{} {} {} {} {}",
+                a["drop_seed"], a["grasp"], a["choice"], a["reason"], a["held"]
             )
         })
         .collect()
@@ -209,10 +211,27 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
         assert_eq!((image.width(), image.height()), (512, 512));
     }
 
-    // Same seed, same machine: the same grasps and outcomes.
+    // The 3 attempts ran 2 at a time; one after another, on one thread, the same grasps,
+    // scores and outcomes.
+    assert_eq!(results["timing"]["workers"], 2);
     let again = setup.path("again.json");
-    assert_ok(&setup.run(&["eval", "--task", "train", "--json", again.to_str().unwrap()]));
-    assert_eq!(decisions(&report), decisions(&read_json(&again)));
+    assert_ok(&graspmap(&[
+        "--data",
+        setup.dir.path().to_str().unwrap(),
+        "--split",
+        setup.path("split.json").to_str().unwrap(),
+        "--threads",
+        "1",
+        "eval",
+        "--task",
+        "train",
+        "--json",
+        again.to_str().unwrap(),
+    ]));
+    let again = read_json(&again);
+    assert_eq!(again["results"]["timing"]["workers"], 1);
+    assert_summary_matches(&again["results"]);
+    assert_eq!(decisions(&report), decisions(&again));
     assert_eq!(report["config"]["centring"], false);
     assert_eq!(report["config"]["verify_top"], 200);
     assert_eq!(report["config"]["verify_floor"], 0.0);

@@ -11,7 +11,7 @@ use image::RgbImage;
 mod config;
 mod sweep;
 
-use super::Context;
+use super::{workers, Context};
 use crate::assets::objects::ObjectModel;
 use crate::data::atomic::save_image_atomic;
 use crate::data::output::{check_output_dir, check_output_file};
@@ -42,10 +42,9 @@ use sweep::{
     announce_plan, finished_runs, keep_interrupted, kept_path, resolved_config, resume_source,
 };
 
-/// Settings shared by every scene of one evaluation.
+/// Settings shared by every scene of one evaluation, and by the threads that run them.
 struct Evaluation<'a> {
     context: &'a Context,
-    policy: Box<dyn Policy>,
     suppression: SuppressionConfig,
     workcell: WorkcellConfig,
     vis_dir: PathBuf,
@@ -54,9 +53,30 @@ struct Evaluation<'a> {
     max_attempts: u32,
     give_up_after: u32,
     push_unverified: bool,
-    recording: Option<Vec<RgbImage>>,
     bar: indicatif::ProgressBar,
     check_invariants: bool,
+    /// One scene at a time: print its lines as they happen, not when it ends.
+    live_lines: bool,
+}
+
+/// What each thread owns: its policy, with its own copy of the network, and with --record
+/// the episode's frames.
+struct Worker {
+    policy: Box<dyn Policy + Send>,
+    recording: Option<Vec<RgbImage>>,
+}
+
+/// A piece of an evaluation that runs on its own: an empty_bin scene, or one attempt of
+/// train/test (each drops its object afresh).
+enum Job {
+    Scene(u64),
+    Attempt { seed: u64, object: usize, try_: u32 },
+}
+
+/// A finished [`Job`]: a scene with the lines it printed, or one attempt of a seed.
+enum Finished {
+    Scene(SceneRun, Vec<String>),
+    Attempt(u64, AttemptRecord),
 }
 
 /// Runs the command.
@@ -71,8 +91,9 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
             config.seeds.len()
         );
     }
-    crate::model::use_threads(context.threads);
-    let policy = policy(&config)?;
+    // A missing or wrong checkpoint is reported before anything starts; each thread then
+    // loads its own copy.
+    policy(&config)?;
     let split = context.split()?;
     let names: Vec<String> = match config.task {
         Task::Train => split.train.clone(),
@@ -96,21 +117,6 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         _ => models.len() as u64 * u64::from(ATTEMPTS_PER_OBJECT),
     };
     announce_plan(context, config.task, per_scene, seeds.len());
-    let mut evaluation = Evaluation {
-        context,
-        policy,
-        suppression: config.suppression,
-        workcell: WorkcellConfig::default(),
-        vis_dir,
-        // By the whole sweep, so that shards write where the unsharded run would.
-        per_seed_vis: config.seeds.len() > 1,
-        max_attempts: config.max_attempts,
-        give_up_after: config.give_up_after,
-        push_unverified: config.push_unverified,
-        recording: config.record.as_ref().map(|_| Vec::new()),
-        bar: context.progress_bar("attempts", per_scene * seeds.len() as u64, 0),
-        check_invariants: config.check_invariants,
-    };
 
     let mut runs = if config.resume {
         let source = resume_source(context, &kept);
@@ -125,27 +131,76 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
     } else {
         Vec::new()
     };
+    let jobs: Vec<Job> = seeds
+        .iter()
+        .filter(|&&seed| !runs.iter().any(|r| r.seed == seed))
+        .flat_map(|&seed| match config.task {
+            Task::EmptyBin => vec![Job::Scene(seed)],
+            Task::Train | Task::Test => (0..models.len())
+                .flat_map(|object| {
+                    (0..ATTEMPTS_PER_OBJECT).map(move |try_| Job::Attempt { seed, object, try_ })
+                })
+                .collect(),
+        })
+        .collect();
+    // The episode video is one thread's frames, in order.
+    let (workers, network_threads) = match config.record {
+        Some(_) => (1, context.threads),
+        None => workers::plan(context.threads, jobs.len()),
+    };
+    crate::model::use_threads(network_threads);
+    let evaluation = Evaluation {
+        context,
+        suppression: config.suppression,
+        workcell: WorkcellConfig::default(),
+        vis_dir,
+        // By the whole sweep, so that shards write where the unsharded run would.
+        per_seed_vis: config.seeds.len() > 1,
+        max_attempts: config.max_attempts,
+        give_up_after: config.give_up_after,
+        push_unverified: config.push_unverified,
+        bar: context.progress_bar("attempts", per_scene * seeds.len() as u64, 0),
+        check_invariants: config.check_invariants,
+        live_lines: workers == 1,
+    };
     evaluation.bar.inc(per_scene * runs.len() as u64);
-    let mut interrupted = None;
-    for &seed in &seeds {
-        if runs.iter().any(|r| r.seed == seed) {
-            continue;
-        }
-        let run = match config.task {
-            Task::EmptyBin => evaluation.empty_bin(&models, seed)?,
-            Task::Train | Task::Test => evaluation.single_objects(&models, seed)?,
-        };
-        match run {
-            Some(run) => runs.push(run),
-            None => {
-                interrupted = interrupt::requested();
-                break;
+    let per_seed = models.len() * ATTEMPTS_PER_OBJECT as usize;
+    let mut attempts_of: BTreeMap<u64, Vec<AttemptRecord>> = BTreeMap::new();
+    let states = workers::run_in_order(
+        &jobs,
+        workers,
+        || {
+            crate::model::use_threads(network_threads);
+            Ok(Worker {
+                policy: policy(&config)?,
+                recording: config.record.as_ref().map(|_| Vec::new()),
+            })
+        },
+        |worker, job| evaluation.run_job(worker, &models, job),
+        |finished| match finished {
+            Finished::Scene(run, lines) => {
+                for line in &lines {
+                    evaluation.bar.suspend(|| context.say(line));
+                }
+                runs.push(run);
             }
-        }
-    }
+            Finished::Attempt(seed, record) => {
+                let attempts = attempts_of.entry(seed).or_default();
+                attempts.push(record);
+                if attempts.len() == per_seed {
+                    runs.push(SceneRun {
+                        seed,
+                        attempts: std::mem::take(attempts),
+                        bin: None,
+                    });
+                }
+            }
+        },
+    )?;
     // Resumed runs come first; a report lists its scenes in the order of --seeds.
     runs.sort_by_key(|r| seeds.iter().position(|&s| s == r.seed));
     evaluation.bar.finish_and_clear();
+    let interrupted = interrupt::requested().filter(|_| runs.len() < seeds.len());
     if let Some(interrupted) = interrupted {
         let elapsed = start.elapsed().as_secs_f64();
         return Err(keep_interrupted(
@@ -157,13 +212,22 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
             interrupted,
         ));
     }
-    if let (Some(path), Some(frames)) = (&config.record, &evaluation.recording) {
+    let recording = states.into_iter().next().and_then(|w| w.recording);
+    if let (Some(path), Some(frames)) = (&config.record, &recording) {
         save_video_atomic(frames, EPISODE_EVERY_STEPS, path)
             .with_context(|| format!("writing --record {}", path.display()))?;
         context.say(&format!("wrote the episode video to {}", path.display()));
     }
 
-    finish(context, &config, &names, runs, start, &evaluation.vis_dir)
+    finish(
+        context,
+        &config,
+        &names,
+        runs,
+        start,
+        workers,
+        &evaluation.vis_dir,
+    )
 }
 
 /// Summarises a finished evaluation, prints it, and writes its report to --json and to
@@ -174,6 +238,7 @@ fn finish(
     names: &[String],
     runs: Vec<SceneRun>,
     start: Instant,
+    workers: usize,
     vis_dir: &Path,
 ) -> anyhow::Result<()> {
     let drew = runs
@@ -189,6 +254,7 @@ fn finish(
         start.elapsed().as_secs_f64(),
         false,
     );
+    results.timing.workers = workers;
     results.video = config.record.clone();
     results.vis_dir = drew.then(|| vis_dir.to_path_buf());
     for line in report_lines(&results, config.suppression.remember) {
@@ -207,7 +273,7 @@ fn finish(
 }
 
 /// The policy that chooses the grasps, with its model loaded when it needs one.
-fn policy(config: &EvalConfig) -> anyhow::Result<Box<dyn Policy>> {
+fn policy(config: &EvalConfig) -> anyhow::Result<Box<dyn Policy + Send>> {
     Ok(match config.policy {
         PolicyKind::Model => Box::new(ModelPolicy::new(
             AffordanceModel::load(&config.checkpoint, config.precision)?,
@@ -219,52 +285,69 @@ fn policy(config: &EvalConfig) -> anyhow::Result<Box<dyn Policy>> {
 }
 
 impl Evaluation<'_> {
-    /// train/test: each object alone, [`ATTEMPTS_PER_OBJECT`] fresh drops each.
-    fn single_objects(
-        &mut self,
+    /// Runs one job on a worker's policy; `None` when a signal stopped it.
+    fn run_job(
+        &self,
+        worker: &mut Worker,
         models: &[ObjectModel],
-        seed: u64,
-    ) -> anyhow::Result<Option<SceneRun>> {
-        let mut attempts = Vec::new();
-        for (i, model) in models.iter().enumerate() {
-            for a in 0..ATTEMPTS_PER_OBJECT {
-                let started = Instant::now();
-                let drop_seed = seed + 100 * i as u64 + u64::from(a) + SINGLE_OBJECT_SEED_OFFSET;
-                let mut cell = self.workcell()?;
-                cell.drop_objects(std::slice::from_ref(model), drop_seed)?;
-                let drop_seconds = started.elapsed().as_secs_f64();
-                // Suppression remembers actions within a scene; each attempt here is a new one.
-                let memory = Suppression::new(self.suppression);
-                let vis = self.vis_path(seed, &format!("{}_{a}.png", model.name));
-                let mut record = self.attempt(&mut cell, &memory, drop_seed, a, vis)?;
-                record.object = Some(model.name.clone());
-                record.timing.sim += drop_seconds;
-                record.timing.wall = started.elapsed().as_secs_f64();
-                self.bar.inc(1);
-                self.bar.set_message(format!(
-                    "{} {}",
-                    model.name,
-                    if record.success {
-                        "success"
-                    } else {
-                        record.reason.name()
-                    }
-                ));
-                attempts.push(record);
-                if interrupt::requested().is_some() {
-                    return Ok(None);
-                }
-            }
+        job: &Job,
+    ) -> anyhow::Result<Option<Finished>> {
+        if interrupt::requested().is_some() {
+            return Ok(None);
         }
-        Ok(Some(SceneRun {
-            seed,
-            attempts,
-            bin: None,
-        }))
+        Ok(match *job {
+            Job::Scene(seed) => self
+                .empty_bin(worker, models, seed)?
+                .map(|(run, lines)| Finished::Scene(run, lines)),
+            Job::Attempt { seed, object, try_ } => Some(Finished::Attempt(
+                seed,
+                self.single_object(worker, &models[object], object, seed, try_)?,
+            )),
+        })
+    }
+
+    /// train/test: attempt `a` of object `i`, alone in a fresh drop.
+    fn single_object(
+        &self,
+        worker: &mut Worker,
+        model: &ObjectModel,
+        i: usize,
+        seed: u64,
+        a: u32,
+    ) -> anyhow::Result<AttemptRecord> {
+        let started = Instant::now();
+        let drop_seed = seed + 100 * i as u64 + u64::from(a) + SINGLE_OBJECT_SEED_OFFSET;
+        let mut cell = self.workcell()?;
+        cell.drop_objects(std::slice::from_ref(model), drop_seed)?;
+        let drop_seconds = started.elapsed().as_secs_f64();
+        // Suppression remembers actions within a scene; each attempt here is a new one.
+        let memory = Suppression::new(self.suppression);
+        let vis = self.vis_path(seed, &format!("{}_{a}.png", model.name));
+        let mut record = self.attempt(worker, &mut cell, &memory, drop_seed, a, vis)?;
+        record.object = Some(model.name.clone());
+        record.timing.sim += drop_seconds;
+        record.timing.wall = started.elapsed().as_secs_f64();
+        self.bar.inc(1);
+        self.bar.set_message(format!(
+            "{} {}",
+            model.name,
+            if record.success {
+                "success"
+            } else {
+                record.reason.name()
+            }
+        ));
+        Ok(record)
     }
 
     /// empty_bin: every object in bin 1 at once, picked until the bin is empty or attempts run out.
-    fn empty_bin(&mut self, models: &[ObjectModel], seed: u64) -> anyhow::Result<Option<SceneRun>> {
+    /// With the lines it printed, or keeps to print when the scenes before it have printed theirs.
+    fn empty_bin(
+        &self,
+        worker: &mut Worker,
+        models: &[ObjectModel],
+        seed: u64,
+    ) -> anyhow::Result<Option<(SceneRun, Vec<String>)>> {
         let started = Instant::now();
         let mut cell = self.workcell()?;
         cell.drop_objects(models, seed)?;
@@ -273,6 +356,11 @@ impl Evaluation<'_> {
         let mut memory = Suppression::new(self.suppression);
         let mut attempts: Vec<AttemptRecord> = Vec::new();
         let mut gave_up = false;
+        let mut lines = Vec::new();
+        let mut say = |line: String| match self.live_lines {
+            true => self.bar.suspend(|| self.context.say(&line)),
+            false => lines.push(line),
+        };
         for a in 0..self.max_attempts {
             if count(&cell, ObjectLocation::Bin1) == 0 {
                 self.bar.inc(u64::from(self.max_attempts - a));
@@ -280,7 +368,7 @@ impl Evaluation<'_> {
             }
             let attempt_start = Instant::now();
             let vis = self.vis_path(seed, &format!("seed{seed}_attempt{a:02}.png"));
-            let mut record = self.attempt(&mut cell, &memory, seed, a, vis)?;
+            let mut record = self.attempt(worker, &mut cell, &memory, seed, a, vis)?;
             if let Some(grasp) = record.grasp {
                 memory.record(grasp, record.success);
             }
@@ -302,7 +390,7 @@ impl Evaluation<'_> {
                     line += &format!(" ({held} was carried but came to rest {rests})");
                 }
             }
-            self.bar.suspend(|| self.context.say(&line));
+            say(line);
             self.bar.inc(1);
             attempts.push(record);
             if interrupt::requested().is_some() {
@@ -312,21 +400,19 @@ impl Evaluation<'_> {
             if self.give_up_after > 0 && failing >= self.give_up_after as usize {
                 gave_up = true;
                 self.bar.inc(u64::from(self.max_attempts - a - 1));
-                let line = format!("gave up after {failing} failed attempts in a row.");
-                self.bar.suspend(|| self.context.say(&line));
+                say(format!("gave up after {failing} failed attempts in a row."));
                 break;
             }
         }
         let left = count(&cell, ObjectLocation::Bin1);
-        let line = format!("{left} objects left in the bin.");
-        self.bar.suspend(|| self.context.say(&line));
+        say(format!("{left} objects left in the bin."));
         let locations: BTreeMap<String, ObjectLocation> = cell
             .objects()
             .iter()
             .enumerate()
             .map(|(i, o)| (o.model.name.clone(), cell.locate(i)))
             .collect();
-        Ok(Some(SceneRun {
+        let run = SceneRun {
             seed,
             attempts,
             bin: Some(BinOutcome {
@@ -336,7 +422,8 @@ impl Evaluation<'_> {
                 locations,
                 gave_up,
             }),
-        }))
+        };
+        Ok(Some((run, lines)))
     }
 
     /// A fresh workcell, watching its invariants when the soak asks for it.
@@ -359,7 +446,8 @@ impl Evaluation<'_> {
 
     /// Looks, decides, writes the visualisation and picks.
     fn attempt(
-        &mut self,
+        &self,
+        worker: &mut Worker,
         cell: &mut Workcell,
         memory: &Suppression,
         drop_seed: u64,
@@ -388,7 +476,7 @@ impl Evaluation<'_> {
                 .wrapping_mul(1_000)
                 .wrapping_add(u64::from(attempt)),
         };
-        let decision = self.policy.decide(&view, memory);
+        let decision = worker.policy.decide(&view, memory);
         let vis_written = match &decision.vis {
             Some(image) => {
                 save_image_atomic(image, &vis)?;
@@ -403,7 +491,7 @@ impl Evaluation<'_> {
                 .find(|o| o.id == id)
                 .map(|o| o.model.name.clone())
         });
-        if self.recording.is_some() {
+        if worker.recording.is_some() {
             cell.start_recording(EPISODE_EVERY_STEPS);
         }
         let sim_start = Instant::now();
@@ -422,7 +510,7 @@ impl Evaluation<'_> {
             (Err(why), None) => PickOutcome::failure(PickReason::Ungraspable, why.to_string()),
         };
         let sim = sim_start.elapsed().as_secs_f64();
-        if let Some(frames) = &mut self.recording {
+        if let Some(frames) = &mut worker.recording {
             let mut view = rgb.clone();
             if let Ok(g) = &decision.grasp {
                 draw_grasp(&mut view, g);
