@@ -7,7 +7,7 @@ mod rounds;
 mod store;
 mod web;
 
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
@@ -280,28 +280,23 @@ impl ObjectJob<'_> {
         shared: &Mutex<Shared>,
         workers: usize,
     ) -> anyhow::Result<Vec<ObjectSummary>> {
-        let next = AtomicUsize::new(0);
-        let outcomes: Mutex<Vec<Option<anyhow::Result<ObjectSummary>>>> =
-            Mutex::new((0..objects.len()).map(|_| None).collect());
-        std::thread::scope(|scope| {
-            for _ in 0..workers.min(objects.len()).max(1) {
-                scope.spawn(|| loop {
-                    let j = next.fetch_add(1, Ordering::SeqCst);
-                    if j >= objects.len() || self.stop.load(Ordering::SeqCst) {
-                        break;
-                    }
-                    let outcome = self.label_object(j, &objects[j], models, shared);
-                    if outcome.is_err() {
-                        self.stop.store(true, Ordering::SeqCst);
-                    }
-                    lock(&outcomes)[j] = Some(outcome);
-                });
-            }
-        });
+        let jobs: Vec<usize> = (0..objects.len()).collect();
         let mut summaries = Vec::new();
-        for outcome in lock(&outcomes).drain(..).flatten() {
-            summaries.push(outcome?);
-        }
+        crate::commands::workers::run_in_order(
+            &jobs,
+            workers,
+            || Ok(()),
+            |(), &j| {
+                let outcome = self.label_object(j, &objects[j], models, shared);
+                if outcome.is_err() {
+                    // The objects being labelled stop at their next round, not only the
+                    // ones not yet started.
+                    self.stop.store(true, Ordering::SeqCst);
+                }
+                outcome.map(Some)
+            },
+            |summary| summaries.push(summary),
+        )?;
         Ok(summaries)
     }
 
