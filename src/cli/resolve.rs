@@ -182,6 +182,7 @@ impl ImproveArgs {
                 precision,
                 crop: self.crop,
                 trial_weight: self.trial_weight,
+                lr: self.lr,
                 ..TrainConfig::default()
             },
             eval_seeds: self.eval_seeds.map(|s| s.0),

@@ -6,6 +6,7 @@ use clap::Args;
 
 use super::values::{fraction, named, parse_seed_list, positive_up_to, PrecisionChoice, SeedList};
 use crate::commands::collect::CollectPolicy;
+use crate::commands::improve::ROUND_LR;
 use crate::data::trials::Shard;
 use crate::model::config::TrainConfig;
 
@@ -89,7 +90,7 @@ pub(crate) struct MergeArgs {
 #[derive(Debug, Args)]
 pub(crate) struct ImproveArgs {
     /// Rounds of collect-then-retrain.
-    #[arg(long, default_value_t = 2, value_parser = clap::value_parser!(u32).range(1..=20))]
+    #[arg(long, default_value_t = 3, value_parser = clap::value_parser!(u32).range(1..=20))]
     pub(crate) rounds: u32,
     /// Scenes collected per round.
     #[arg(long, default_value_t = 100, value_parser = clap::value_parser!(u64).range(1..))]
@@ -112,6 +113,10 @@ pub(crate) struct ImproveArgs {
     /// A trial's loss weight (as train --trial-weight).
     #[arg(long, value_name = "W", default_value_t = TrainConfig::default().trial_weight, value_parser = positive_up_to::<f32>(1.0))]
     pub(crate) trial_weight: f32,
+    /// Learning rate of each round's retraining, which starts from the round's model: a tenth of
+    /// train's, as at 1e-3 a round can drift from what the labels taught (docs/learning.md).
+    #[arg(long, default_value_t = ROUND_LR, value_parser = positive_up_to::<f64>(1.0))]
+    pub(crate) lr: f64,
     /// Where the rounds go [default: DATA/improve].
     #[arg(long, value_name = "DIR")]
     pub(crate) out: Option<PathBuf>,

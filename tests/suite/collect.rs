@@ -503,6 +503,10 @@ fn improve_collects_with_each_round_s_model_and_a_rerun_continues_without_redoin
     let trained_on = &meta["trained_on"];
     assert_eq!(trained_on["trials"].as_array().unwrap().len(), 2);
     assert_eq!(trained_on["start"]["path"], round1_model.to_str().unwrap());
+    assert_eq!(
+        meta["config"]["lr"], 1e-4,
+        "a round retrains at a tenth of train's learning rate"
+    );
     // A rerun finds every stage done and changes nothing.
     let before = store_bytes(&setup.path("improve/round_02"));
     assert_ok(&improve());
