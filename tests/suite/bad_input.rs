@@ -463,6 +463,7 @@ const CASES: &[Case] = &[
     ),
     case("merge --out {tmp}/m.json", 2, "SHARD_DIR"),
     case("--data {data} improve --rounds 0", 2, "--rounds"),
+    case("--data {data} improve --lr nan", 2, "--lr"),
     case(
         "--data {data} collect --policy oracle --checkpoint {tmp}/m.safetensors",
         2,
