@@ -87,7 +87,7 @@ done
 # Settings: the full run repeats BENCHMARKS.md's commands; --quick shrinks every count.
 if ((quick)); then
   EPOCHS=1 PER_OBJECT=2 TEST_SEEDS=0 HELD_TEST=3000 EMPTY_SEEDS=1 HELD_EMPTY=11 MAX_ATTEMPTS=2
-  ROUNDS=1 SCENES=2 ROUND_EPOCHS=1 SLURM_SEEDS=1-2
+  ROUNDS=1 SCENES=2 ROUND_EPOCHS=1 SLURM_SEEDS=1-2 SPREAD_SEEDS=0
   BENCH_STEPS=2 BENCH_ROUNDS=1 SWEEP_SEEDS=1 SOAK_RANDOM=2 SOAK_MODEL=1 FUZZ_SCALE=0.01 KILLS=1
   VARIANT_LIST="rgb:1:2 rgbd:3:2"
 else
@@ -95,8 +95,10 @@ else
   HELD_EMPTY=11-20 MAX_ATTEMPTS=25 BENCH_STEPS=20 BENCH_ROUNDS=2 SWEEP_SEEDS="1 2 3"
   SOAK_RANDOM=200 SOAK_MODEL=20 FUZZ_SCALE=1 KILLS=10 VARIANT_LIST="rgb:1 rgbd:1 rgb:3 rgbd:3 rgbd:3:24"
   ROUNDS=${ROUNDS:-3} SCENES=100 ROUND_EPOCHS=10 SLURM_SEEDS=1-10
+  SPREAD_SEEDS=$(seq -s, 0 1000 17000)
 fi
 export EPOCHS PER_OBJECT TEST_SEEDS HELD_TEST EMPTY_SEEDS HELD_EMPTY MAX_ATTEMPTS ROUNDS SCENES ROUND_EPOCHS SLURM_SEEDS
+export SPREAD_SEEDS
 
 out=$(realpath -m "${OUT:-target/benchmarks}")
 mkdir -p "$out/eval" "$out/logs"
@@ -306,7 +308,7 @@ t_crop() {
 
 # The loop from the default model (labels and crops), then every round's model and the start
 # model on train, test and empty_bin (held-out seeds too), with the vetoes and as the plain
-# argmax; the oracle with memory beside them.
+# argmax; the oracle with memory beside them, and the spread of test between seed sets.
 t_trials() {
   local d=$out/trials name spec tag ck
   ensure_model
@@ -334,10 +336,20 @@ t_trials() {
       eval_into "$d/eval/$tag-$name-push.json" "$d/data" --checkpoint "$ck" "${spec[@]}" --push-unverified
     done
   done
+  ev oracle train
+  ev oracle test
+  ev oracle htest
   ev oracle enp8
   ev oracle henp8
   ev oracle enp8 giveup6 --give-up-after 6
   ev oracle henp8 giveup6 --give-up-after 6
+  # How far apart two sets of three test seeds fall on their own: the labels-only model, the last
+  # round's and the oracle on SPREAD_SEEDS, read as consecutive sets of three.
+  ck=$d/data/improve/$(printf 'round_%02d' "$ROUNDS")/model/best.safetensors
+  eval_into "$d/eval/start-spread.json" "$d/data" --checkpoint "$d/data/affordance/best.safetensors" \
+    --task test --seeds "$SPREAD_SEEDS"
+  eval_into "$d/eval/last-spread.json" "$d/data" --checkpoint "$ck" --task test --seeds "$SPREAD_SEEDS"
+  eval_into "$out/eval/oracle-spread.json" "$model_dir" --policy oracle --task test --seeds "$SPREAD_SEEDS"
 }
 
 t_slurm() {
@@ -966,13 +978,27 @@ def t_trials():
                      moved(g("enp8-giveup6")), rate(g("enp8-giveup6")), DASH, moved(g("henp8-giveup6"))])
         rows.append([("labels only" if i == 0 else f"round {i}") + ", `--push-unverified`", DASH, DASH, DASH,
                      moved(g("enp8-push")), rate(g("enp8-push")), DASH, moved(g("henp8-push"))])
-    rows.append(["oracle, np8", DASH, DASH, DASH, moved(ev("oracle-enp8")), rate(ev("oracle-enp8")), DASH,
-                 moved(ev("oracle-henp8"))])
+    rows.append(["oracle (np8 in empty_bin)", DASH, count(ev("oracle-train")), rate(ev("oracle-test")), moved(ev("oracle-enp8")),
+                 rate(ev("oracle-enp8")), rate(ev("oracle-htest")), moved(ev("oracle-henp8"))])
     rows.append(["oracle, np8, `--give-up-after 6`", DASH, DASH, DASH, moved(ev("oracle-enp8-giveup6")),
                  rate(ev("oracle-enp8-giveup6")), DASH, moved(ev("oracle-henp8-giveup6"))])
     md(["model", "collected", "train", f"test, {seeds(E['TEST_SEEDS'])}", f"empty_bin, {seeds(E['EMPTY_SEEDS'])}, np8",
         "its picks", f"held out: test, {seeds(E['HELD_TEST'])}", f"held out: empty_bin, {seeds(E['HELD_EMPTY'])}, np8"],
        rows)
+    spread = []
+    for label, r in (("labels only", ev("start-spread", f"{d}/eval")),
+                     (f"round {E['ROUNDS']}", ev("last-spread", f"{d}/eval")), ("the oracle", ev("oracle-spread"))):
+        counts = per_seed(r)
+        if not counts or len(counts) < 6:
+            continue
+        sets = [counts[i:i + 3] for i in range(0, len(counts) - len(counts) % 3, 3)]
+        rates = [100 * sum(c) / (30 * len(c)) for c in sets]
+        spread.append(f"{label} {pct(r['success']['rate'])} % over all, sets " + ", ".join(f"{x:.1f}" for x in rates)
+                      + f" (sd {statistics.stdev(rates):.1f})")
+    if spread:
+        print(f"Test on {seeds(E['SPREAD_SEEDS'])}, as consecutive sets of three seeds (the first is the table's "
+              "test, the second its held-out test), in %: " + "; ".join(spread) + ".")
+        print()
 
 
 def t_slurm():
