@@ -232,6 +232,10 @@ pub(crate) struct EvalArgs {
     /// MM of square across a pad (5 ≈ 13°), then those within the planner's 10 mm (0 = one pass).
     #[arg(long, value_name = "MM", default_value_t = ModelPolicyConfig::default().verify_square * 1000.0, value_parser = non_negative_up_to(10.0))]
     pub(crate) verify_square: f32,
+    /// Model policy: room verification keeps between the squeezed part and each open pad, in
+    /// mm (the planner keeps 6, which leaves a flat 77 mm box only its corners).
+    #[arg(long, value_name = "MM", default_value_t = ModelPolicyConfig::default().verify_margin * 1000.0, value_parser = non_negative_up_to(10.0))]
+    pub(crate) verify_margin: f32,
     /// Model policy: move the chosen grasp to the middle of the surface under it, turning it to
     /// an angle that fits there if needed (needs `--collision-check full`). Off by default: it
     /// moves more objects in empty_bin but picks fewer training objects (BENCHMARKS.md#centring).

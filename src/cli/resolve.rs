@@ -70,6 +70,7 @@ impl EvalArgs {
             verify_floor: self.verify_floor,
             verify_strips: usize::from(self.verify_strips),
             verify_square: self.verify_square / 1000.0,
+            verify_margin: self.verify_margin / 1000.0,
             verify_rejected: self.verify_rejected.unwrap_or(self.verify_top),
             centring: self.centring,
         };

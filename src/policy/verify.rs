@@ -35,8 +35,10 @@ pub struct CheckConfig {
     pub(crate) palm_half_along: f32,
     /// Palm half extent across the closing line (m).
     pub(crate) palm_half_across: f32,
-    /// Safety margin around the pads and inside the opening (m).
+    /// Safety margin around the pads and the palm (m).
     pub(crate) margin: f32,
+    /// Room kept inside the opening between what is squeezed and each open pad (m).
+    pub(crate) squeeze_margin: f32,
     /// Largest shift of the squeezed outline across a pad's width (m); more is a slanted face.
     pub(crate) max_slant: f32,
     /// How many of a pad's three strips across its width (the outer quarters and the middle
@@ -93,6 +95,7 @@ impl Default for CheckConfig {
             palm_half_along: GRIPPER.palm_half_along,
             palm_half_across: GRIPPER.palm_half_across,
             margin: PLANNING_MARGIN,
+            squeeze_margin: PLANNING_MARGIN,
             max_slant: MAX_SLANT,
             strips: PLANNER_STRIPS,
             angles: PLANNED_ANGLES,
@@ -294,7 +297,7 @@ pub(crate) fn check_grasp(
     let along = target.closing;
     let across = Vector::new(-along.y, along.x, 0.0);
     let half_open = config.opening / 2.0;
-    let limit = half_open - config.margin;
+    let limit = half_open - config.squeeze_margin;
     let pad_outer = half_open + config.pad_thickness + config.margin;
     let pad_half_width = config.pad_width / 2.0 + config.margin;
 
@@ -439,6 +442,39 @@ mod tests {
         // Beyond the margin beside the pad nothing is touched.
         let clear_of_pad = config.pad_width / 2.0 + config.margin * 1.5;
         assert!(with_extra_point(inside_margin, clear_of_pad, 0.01).is_ok());
+    }
+
+    #[test]
+    fn the_squeeze_margin_decides_whether_a_face_close_to_an_open_pad_fits() {
+        let camera = Camera::top_down();
+        let frame = floor_frame(&camera, Some(1));
+        let grasp = PixelGrasp {
+            u: 64,
+            v: 64,
+            angle_deg: 0.0,
+        };
+        let target = world_grasp(&camera, &frame, grasp);
+        let half_open = GRIPPER.max_opening / 2.0;
+        // A face 4 mm inside the open pad on one side, square across its whole width.
+        let mut points: Vec<Vector> = HeightMap::new(&camera, &frame).surface_points().collect();
+        let across = Vector::new(-target.closing.y, target.closing.x, 0.0);
+        for k in -5..=5 {
+            let w = k as f32 * 0.002;
+            points.push(
+                target.tcp + target.closing * (half_open - 0.004) + across * w + Vector::Z * 0.01,
+            );
+        }
+        let cloud = Cloud::from_points(points);
+        let check = |squeeze_margin: f32| {
+            let config = CheckConfig {
+                squeeze_margin,
+                ..CheckConfig::default()
+            };
+            check_grasp(&cloud, &camera, &frame, grasp, target.tcp, &config)
+        };
+        assert_eq!(check(PLANNING_MARGIN), Err(Rejection::TooWide));
+        let passed = check(0.003).expect("4 mm of room is more than 3");
+        assert!(passed.width > half_open - 0.004, "{passed:?}");
     }
 
     #[test]

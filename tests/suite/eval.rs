@@ -238,6 +238,7 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
     assert_eq!(report["config"]["verify_rejected"], 200);
     assert_eq!(report["config"]["verify_strips"], 3);
     assert!((report["config"]["verify_square"].as_f64().unwrap() - 0.005).abs() < 1e-6);
+    assert!((report["config"]["verify_margin"].as_f64().unwrap() - 0.003).abs() < 1e-6);
 
     // Centring reports the executed grasp as its own action: angle, bin and map pixel agree.
     let centred = setup.path("centred.json");

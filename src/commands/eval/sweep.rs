@@ -184,6 +184,7 @@ pub(super) fn resolved_config(
         "verify_rejected": model.then_some(config.model.verify_rejected),
         "verify_strips": model.then_some(config.model.verify_strips),
         "verify_square": model.then_some(config.model.verify_square),
+        "verify_margin": model.then_some(config.model.verify_margin),
         "centring": model && config.model.centring,
         "max_attempts": config.max_attempts,
         "give_up_after": config.give_up_after,
