@@ -333,8 +333,14 @@ t_trials() {
     for name in enp8 henp8; do
       spec_args "$name"
       eval_into "$d/eval/$tag-$name-giveup6.json" "$d/data" --checkpoint "$ck" "${spec[@]}" --give-up-after 6
-      eval_into "$d/eval/$tag-$name-push.json" "$d/data" --checkpoint "$ck" "${spec[@]}" --push-unverified
+      eval_into "$d/eval/$tag-$name-nopush.json" "$d/data" --checkpoint "$ck" "${spec[@]}" --push-unverified false
     done
+  done
+  # The last round with the checks as they were before pushing and the 3 mm squeeze margin.
+  for name in test htest enp8 henp8; do
+    spec_args "$name"
+    eval_into "$d/eval/$tag-$name-before.json" "$d/data" --checkpoint "$ck" "${spec[@]}" \
+      --push-unverified false --verify-margin 6
   done
   ev oracle train
   ev oracle test
@@ -977,8 +983,12 @@ def t_trials():
                          rate(g("enp8" + argmax)), rate(g("htest" + argmax)), moved(g("henp8" + argmax))])
         rows.append([("labels only" if i == 0 else f"round {i}") + ", `--give-up-after 6`", DASH, DASH, DASH,
                      moved(g("enp8-giveup6")), rate(g("enp8-giveup6")), DASH, moved(g("henp8-giveup6"))])
-        rows.append([("labels only" if i == 0 else f"round {i}") + ", `--push-unverified`", DASH, DASH, DASH,
-                     moved(g("enp8-push")), rate(g("enp8-push")), DASH, moved(g("henp8-push"))])
+        rows.append([("labels only" if i == 0 else f"round {i}") + ", `--push-unverified false`", DASH, DASH, DASH,
+                     moved(g("enp8-nopush")), rate(g("enp8-nopush")), DASH, moved(g("henp8-nopush"))])
+        if i == int(E["ROUNDS"]):
+            rows.append([f"round {i}, `--push-unverified false --verify-margin 6`", DASH, DASH, rate(g("test-before")),
+                         moved(g("enp8-before")), rate(g("enp8-before")), rate(g("htest-before")),
+                         moved(g("henp8-before"))])
     rows.append(["oracle (np8 in empty_bin)", DASH, count(ev("oracle-train")), rate(ev("oracle-test")),
                  moved(ev("oracle-enp8")), rate(ev("oracle-enp8")), rate(ev("oracle-htest")), moved(ev("oracle-henp8"))])
     rows.append(["oracle, np8, `--give-up-after 6`", DASH, DASH, DASH, moved(ev("oracle-enp8-giveup6")),

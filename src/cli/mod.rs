@@ -249,9 +249,11 @@ pub(crate) struct EvalArgs {
     #[arg(long, value_name = "K", default_value_t = 0)]
     pub(crate) give_up_after: u32,
     /// Model policy: where no grasp passes verification, push the object under the best one
-    /// off its neighbours instead; an attempt, not a grasp (docs/evaluation.md, "Pushing").
-    #[arg(long)]
-    pub(crate) push_unverified: bool,
+    /// off its neighbours instead of executing that grasp; an attempt, not a grasp
+    /// (docs/evaluation.md, "Pushing"). Default: true in empty_bin, false in train and test,
+    /// where each attempt drops its object afresh.
+    #[arg(long, value_name = "BOOL", num_args = 0..=1, default_missing_value = "true")]
+    pub(crate) push_unverified: Option<bool>,
     /// Write the episode video: an oblique view beside the camera view with the chosen grasp
     /// (one seed only); .mp4 for H.264 (small, plays in browsers) or .gif.
     #[arg(long, value_name = "VIDEO")]

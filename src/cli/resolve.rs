@@ -11,7 +11,7 @@ use super::{
 };
 use crate::assets::objects::{ObjectLibrary, SplitFile};
 use crate::commands::collect::{CollectConfig, CollectPolicy};
-use crate::commands::eval::EvalConfig;
+use crate::commands::eval::{pushes_by_default, EvalConfig};
 use crate::commands::grasp::{GraspChoice, GraspConfig};
 use crate::commands::improve::ImproveConfig;
 use crate::commands::label::{ClickNoise, ClickSource, LabelConfig};
@@ -106,7 +106,7 @@ impl EvalArgs {
             model,
             max_attempts: self.max_attempts,
             give_up_after: self.give_up_after,
-            push_unverified: self.push_unverified,
+            push_unverified: self.push_unverified.unwrap_or(pushes_by_default(self.task)),
             record: self.record,
             resume: self.resume,
             check_invariants: self.check_invariants,

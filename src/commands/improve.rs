@@ -12,7 +12,7 @@ use std::time::Instant;
 use anyhow::Context as _;
 
 use super::collect::CollectConfig;
-use super::eval::EvalConfig;
+use super::eval::{pushes_by_default, EvalConfig};
 use super::train::TrainOptions;
 use super::Context;
 use crate::data::atomic::write_atomic;
@@ -236,7 +236,7 @@ fn evaluate(
         model: ModelPolicyConfig::default(),
         max_attempts: 25,
         give_up_after: 0,
-        push_unverified: false,
+        push_unverified: pushes_by_default(Task::EmptyBin),
         record: None,
         resume: false,
         check_invariants: false,

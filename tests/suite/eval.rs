@@ -195,13 +195,26 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
         assert!(a["timing"]["network"].as_f64().unwrap() > 0.0);
         assert!(a["verified"].is_boolean(), "verification ran: {a}");
     }
-    // The report says how many executed grasps nothing verified.
-    let unverified = attempts.iter().filter(|a| a["verified"] == false).count();
+    // The report says how many grasps nothing verified were executed, and how many pushed.
+    let (pushed, unverified): (Vec<&Value>, Vec<&Value>) = attempts
+        .iter()
+        .filter(|a| a["verified"] == false)
+        .partition(|a| a["reason"] == "pushed");
     assert_eq!(
         stdout.contains("unverified: "),
-        unverified > 0,
-        "{unverified} unverified: {stdout}"
+        !unverified.is_empty(),
+        "{} unverified: {stdout}",
+        unverified.len()
     );
+    assert_eq!(
+        stdout.contains("pushed: "),
+        !pushed.is_empty(),
+        "{} pushed: {stdout}",
+        pushed.len()
+    );
+    // Train drops each attempt's object afresh: nothing to push by default.
+    assert_eq!(report["config"]["push_unverified"], false);
+    assert!(pushed.is_empty(), "{pushed:?}");
     assert_summary_matches(results);
     for a in 0..3 {
         let vis = setup.path(&format!(
@@ -335,13 +348,8 @@ fn push_unverified_pushes_where_nothing_verifies_and_pick_success_counts_only_gr
         "--verify-top",
         "1",
     ];
-    let out = setup.run(
-        &[
-            &args[..],
-            &["--push-unverified", "--json", json.to_str().unwrap()],
-        ]
-        .concat(),
-    );
+    // Pushing is the default.
+    let out = setup.run(&[&args[..], &["--json", json.to_str().unwrap()]].concat());
     assert_ok(&out);
     let report = read_json(&json);
     assert_eq!(report["config"]["push_unverified"], true);
@@ -366,6 +374,27 @@ fn push_unverified_pushes_where_nothing_verifies_and_pick_success_counts_only_gr
     let stdout = String::from_utf8_lossy(&out.stdout);
     let line = format!("pushed: {} attempt", pushes.len());
     assert!(stdout.contains(&line), "{line:?} missing from {stdout}");
+
+    // `--push-unverified false` executes the first grasp that the default pushed.
+    let grasping = setup.path("grasping.json");
+    let off = [
+        "--push-unverified",
+        "false",
+        "--json",
+        grasping.to_str().unwrap(),
+    ];
+    assert_ok(&setup.run(&[&args[..], &off[..]].concat()));
+    let report = read_json(&grasping);
+    assert_eq!(report["config"]["push_unverified"], false);
+    let executed = report["results"]["runs"][0]["attempts"].as_array().unwrap();
+    let first_push = attempts
+        .iter()
+        .position(|a| a["reason"] == "pushed")
+        .unwrap();
+    assert_eq!(executed[first_push]["verified"], false);
+    assert_eq!(executed[first_push]["grasp"], attempts[first_push]["grasp"]);
+    assert_ne!(executed[first_push]["reason"], "pushed");
+    assert!(executed.iter().all(|a| a["reason"] != "pushed"));
 }
 
 #[test]

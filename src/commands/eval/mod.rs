@@ -36,7 +36,8 @@ use crate::present::video::save_video_atomic;
 use crate::sim::pick::{PickOutcome, PickReason};
 use crate::sim::{ObjectLocation, Workcell, WorkcellConfig};
 pub(crate) use config::{
-    EvalConfig, ATTEMPTS_PER_OBJECT, EPISODE_EVERY_STEPS, SINGLE_OBJECT_SEED_OFFSET,
+    pushes_by_default, EvalConfig, ATTEMPTS_PER_OBJECT, EPISODE_EVERY_STEPS,
+    SINGLE_OBJECT_SEED_OFFSET,
 };
 use sweep::{
     announce_plan, finished_runs, keep_interrupted, kept_path, resolved_config, resume_source,
