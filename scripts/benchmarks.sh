@@ -337,6 +337,8 @@ t_trials() {
     done
   done
   # The last round with the checks as they were before pushing and the 3 mm squeeze margin.
+  tag=$(printf 'round_%02d' "$ROUNDS")
+  ck=$d/data/improve/$tag/model/best.safetensors
   for name in test htest enp8 henp8; do
     spec_args "$name"
     eval_into "$d/eval/$tag-$name-before.json" "$d/data" --checkpoint "$ck" "${spec[@]}" \
@@ -352,7 +354,6 @@ t_trials() {
   # How far apart two sets of three test seeds fall on their own: test and held-out test of the
   # labels-only model, the last round and the oracle, with more seeds (SPREAD_SEEDS) beside them.
   [[ -n $SPREAD_SEEDS ]] || return 0
-  ck=$d/data/improve/$(printf 'round_%02d' "$ROUNDS")/model/best.safetensors
   eval_into "$d/eval/start-spread.json" "$d/data" --checkpoint "$d/data/affordance/best.safetensors" \
     --task test --seeds "$SPREAD_SEEDS"
   eval_into "$d/eval/last-spread.json" "$d/data" --checkpoint "$ck" --task test --seeds "$SPREAD_SEEDS"

@@ -393,8 +393,11 @@ mod tests {
     use crate::policy::synthetic::{block_frame, floor_frame};
 
     /// A grasp across the middle of a 26 mm block, the cloud the camera sees, and the checks
-    /// with one more surface point at (`along`, `across`) from the TCP, `above` its height.
-    fn with_extra_point(along: f32, across: f32, above: f32) -> Result<Assessment, Rejection> {
+    /// under `config` with more surface points, each (along, across, above) the TCP.
+    fn with_extra_points(
+        extra: &[[f32; 3]],
+        config: &CheckConfig,
+    ) -> Result<Assessment, Rejection> {
         let camera = Camera::top_down();
         let frame = floor_frame(&camera, Some(1));
         let grasp = PixelGrasp {
@@ -405,16 +408,23 @@ mod tests {
         let target = world_grasp(&camera, &frame, grasp);
         let normal = Vector::new(-target.closing.y, target.closing.x, 0.0);
         let mut points: Vec<Vector> = HeightMap::new(&camera, &frame).surface_points().collect();
-        points.push(target.tcp + target.closing * along + normal * across + Vector::Z * above);
-        let config = CheckConfig::default();
+        points.extend(extra.iter().map(|&[along, across, above]| {
+            target.tcp + target.closing * along + normal * across + Vector::Z * above
+        }));
         check_grasp(
             &Cloud::from_points(points),
             &camera,
             &frame,
             grasp,
             target.tcp,
-            &config,
+            config,
         )
+    }
+
+    /// The default checks with one more surface point at (`along`, `across`) from the TCP,
+    /// `above` its height.
+    fn with_extra_point(along: f32, across: f32, above: f32) -> Result<Assessment, Rejection> {
+        with_extra_points(&[[along, across, above]], &CheckConfig::default())
     }
 
     #[test]
@@ -446,31 +456,17 @@ mod tests {
 
     #[test]
     fn the_squeeze_margin_decides_whether_a_face_close_to_an_open_pad_fits() {
-        let camera = Camera::top_down();
-        let frame = floor_frame(&camera, Some(1));
-        let grasp = PixelGrasp {
-            u: 64,
-            v: 64,
-            angle_deg: 0.0,
-        };
-        let target = world_grasp(&camera, &frame, grasp);
         let half_open = GRIPPER.max_opening / 2.0;
         // A face 4 mm inside the open pad on one side, square across its whole width.
-        let mut points: Vec<Vector> = HeightMap::new(&camera, &frame).surface_points().collect();
-        let across = Vector::new(-target.closing.y, target.closing.x, 0.0);
-        for k in -5..=5 {
-            let w = k as f32 * 0.002;
-            points.push(
-                target.tcp + target.closing * (half_open - 0.004) + across * w + Vector::Z * 0.01,
-            );
-        }
-        let cloud = Cloud::from_points(points);
+        let face: Vec<[f32; 3]> = (-5..=5)
+            .map(|k| [half_open - 0.004, k as f32 * 0.002, 0.01])
+            .collect();
         let check = |squeeze_margin: f32| {
             let config = CheckConfig {
                 squeeze_margin,
                 ..CheckConfig::default()
             };
-            check_grasp(&cloud, &camera, &frame, grasp, target.tcp, &config)
+            with_extra_points(&face, &config)
         };
         assert_eq!(check(PLANNING_MARGIN), Err(Rejection::TooWide));
         let passed = check(0.003).expect("4 mm of room is more than 3");
