@@ -1,17 +1,19 @@
 #!/usr/bin/env python3
-"""Checks the primitive YCB-like object models in assets/objects (stdlib only).
+"""Checks the primitive YCB object models in assets/objects (stdlib only).
 
 Usage:  python3 assets/objects/check_objects.py
 
-For every <Name>/model.urdf listed in TARGETS it computes the exact axis-aligned bounding
-box of the collision primitives (boxes, cylinders along their local z, spheres, each after
-its <origin xyz rpy>) and compares it with the reference size: every dimension must be
-within max(10 %, 5 mm). Mass and <contact><lateral_friction> must equal the table.
-It also checks: robot name, a single link `base_link`, bounding-box centre within 5 mm of
-the link origin, at most 8 primitives, every visual matched by an identical collision,
-every visual has a uniquely named material with a colour, and no primitive thinner than
-8 mm. Finally split.json must hold the expected train/test lists.
-Prints one row per object and exits non-zero on any failure.
+The reference's objects are ../ycb-meshes/SIZES.md: each one's true size (the smallest box
+around its collision mesh in any orientation, sides sorted), mass and friction. For every
+<Name>/model.urdf listed there this script measures the same true size of the collision
+primitives (boxes, cylinders along their local z, spheres, each after its <origin xyz rpy>):
+every side must be within max(10 %, 5 mm) of the table's. Mass and
+<contact><lateral_friction> must equal the table. It also checks: robot name, a single link
+`base_link`, axis-aligned bounding-box centre within 5 mm of the link origin, at most 8
+primitives, every visual matched by an identical collision, every visual has a uniquely named
+material with a colour, and no primitive thinner than 8 mm. Finally split.json must hold the
+table's train/test lists. The same size, mass and friction check runs in the Rust unit tests
+(src/assets/true_size.rs). Prints one row per object and exits non-zero on any failure.
 """
 import json
 import math
@@ -20,24 +22,22 @@ import sys
 import xml.etree.ElementTree as ET
 
 HERE = os.path.dirname(os.path.abspath(__file__))
-# name: (size x, y, z in mm, mass kg, mu, split)
-TARGETS = {
-    "YcbHammer": ((129, 334, 34), 0.665, 1.0, "train"),
-    "YcbMediumClamp": ((87, 77, 29), 0.059, 0.6, "train"),
-    "YcbMustardBottle": ((99, 59, 191), 0.603, 0.8, "train"),
-    "YcbPowerDrill": ((165, 124, 189), 0.895, 0.9, "train"),
-    "YcbTomatoSoupCan": ((66, 66, 102), 0.349, 0.8, "train"),
-    "YcbBanana": ((192, 80, 40), 0.066, 0.8, "test"),
-    "YcbChipsCan": ((75, 75, 230), 0.205, 0.5, "test"),
-    "YcbFoamBrick": ((77, 92, 55), 0.028, 0.5, "test"),
-    "YcbGelatinBox": ((73, 69, 87), 0.097, 0.3, "test"),
-    "YcbMasterChefCan": ((70, 70, 99), 0.404, 0.5, "test"),
-    "YcbPear": ((66, 104, 66), 0.049, 0.6, "test"),
-    "YcbPottedMeatCan": ((101, 88, 84), 0.370, 0.6, "test"),
-    "YcbScissors": ((205, 88, 20), 0.082, 0.8, "test"),
-    "YcbStrawberry": ((41, 53, 45), 0.018, 0.5, "test"),
-    "YcbTennisBall": ((64, 64, 64), 0.058, 0.8, "test"),
-}
+SIZES_MD = os.path.join(HERE, "..", "ycb-meshes", "SIZES.md")
+
+
+def reference_table():
+    """name: (true size in mm sorted, mass kg, mu, split), from SIZES.md."""
+    table = {}
+    with open(SIZES_MD, encoding="utf-8") as fh:
+        for line in fh:
+            if line.startswith("| Ycb"):
+                cells = [c.strip() for c in line.split("|")]
+                size = tuple(float(v) for v in cells[4].split("×"))
+                table[cells[1]] = (size, float(cells[6]), float(cells[7]), cells[2])
+    return table
+
+
+TARGETS = reference_table()
 MIN_THICKNESS_MM = 8.0
 MAX_PRIMITIVES = 8
 
@@ -83,6 +83,69 @@ def half_extent(kind, dims, rot):
         return [dims[0]] * 3
     r, length = dims  # cylinder: axis = third column of rot
     return [abs(rot[i][2]) * length / 2 + r * math.sqrt(max(0.0, 1 - rot[i][2] ** 2)) for i in range(3)]
+
+
+def surface_points(kind, dims, xyz, rot):
+    """Points that bound a primitive: a box's corners, two 64-point rings, a sphere's lattice."""
+    if kind == "box":
+        hx, hy, hz = [d / 2 for d in dims]
+        local = [(sx * hx, sy * hy, sz * hz) for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)]
+    elif kind == "cylinder":
+        r, length = dims
+        local = [(r * math.cos(a), r * math.sin(a), z)
+                 for a in (2 * math.pi * k / 64 for k in range(64)) for z in (-length / 2, length / 2)]
+    else:
+        r, n = dims[0], 200
+        local = []
+        for k in range(n):
+            z = 1 - 2 * (k + 0.5) / n
+            ring, a = math.sqrt(1 - z * z), k * math.pi * (3 - math.sqrt(5))
+            local.append((r * ring * math.cos(a), r * ring * math.sin(a), r * z))
+    return [tuple(xyz[i] + sum(rot[i][j] * p[j] for j in range(3)) for i in range(3)) for p in local]
+
+
+def matmul(a, b):
+    return [[sum(a[i][k] * b[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+
+
+def about(axis, angle):
+    c, s = math.cos(angle), math.sin(angle)
+    return [[[1, 0, 0], [0, c, -s], [0, s, c]], [[c, 0, s], [0, 1, 0], [-s, 0, c]],
+            [[c, -s, 0], [s, c, 0], [0, 0, 1]]][axis]
+
+
+def extents(points, rot):
+    out = []
+    for row in rot:
+        d = [row[0] * p[0] + row[1] * p[1] + row[2] * p[2] for p in points]
+        out.append(max(d) - min(d))
+    return out
+
+
+def true_size(prims):
+    """Sides (m, sorted) of the smallest box around the primitives in any orientation: a greedy
+    descent over rotations from many starts, as src/assets/true_size.rs does it."""
+    points = [p for kind, dims, xyz, rot in prims for p in surface_points(kind, dims, xyz, rot)]
+    starts = [about(2, 0.0)] + [[list(r) for r in zip(*rot)] for _, _, _, rot in prims]
+    starts += [matmul(about(2, math.radians(y)), about(0, math.radians(p)))
+               for y in range(0, 180, 30) for p in range(0, 180, 45)]
+    best = None
+    for rot in starts:
+        sides = extents(points, rot)
+        step = math.radians(10)
+        while step > math.radians(0.1):
+            improved = False
+            for axis in range(3):
+                for sign in (1, -1):
+                    turned = matmul(about(axis, sign * step), rot)
+                    turned_sides = extents(points, turned)
+                    if math.prod(turned_sides) < math.prod(sides) - 1e-15:
+                        rot, sides, improved = turned, turned_sides, True
+            if not improved:
+                step /= 2
+        if best is None or math.prod(sides) < math.prod(best):
+            best = sides
+    return sorted(best)
 
 
 def thickness(kind, dims):
@@ -134,11 +197,12 @@ def check(name, target):
         hi = [max(hi[i], xyz[i] + h[i]) for i in range(3)]
         if thickness(kind, dims) * 1000 < MIN_THICKNESS_MM - 1e-6:
             problems.append(f"{kind} {dims} thinner than {MIN_THICKNESS_MM} mm")
-    size = [(hi[i] - lo[i]) * 1000 for i in range(3)]
     centre = [(hi[i] + lo[i]) / 2 * 1000 for i in range(3)]
-    for axis, s, ref in zip("xyz", size, size_ref):
+    size = [v * 1000 for v in true_size([primitive(c) for c in collisions])]
+    for s, ref in zip(size, size_ref):
         if abs(s - ref) > max(0.1 * ref, 5.0):
-            problems.append(f"{axis} size {s:.1f} mm vs {ref} mm")
+            problems.append(f"true size {[round(v) for v in size]} mm vs {list(size_ref)} mm")
+            break
     if max(abs(c) for c in centre) > 5.0:
         problems.append(f"bbox centre {[round(c, 1) for c in centre]} mm off the origin")
     return size, centre, mass, mu, len(collisions), problems
@@ -146,7 +210,7 @@ def check(name, target):
 
 def main():
     failed = False
-    print(f"{'object':18s} {'bbox size (mm)':>23s}   {'target (mm)':>15s}  {'centre off':>10s}  "
+    print(f"{'object':18s} {'true size (mm)':>23s}   {'target (mm)':>15s}  {'centre off':>10s}  "
           f"{'mass':>6s} {'mu':>4s}  prims  result")
     for name, target in TARGETS.items():
         try:
@@ -156,7 +220,7 @@ def main():
             failed = True
             continue
         s = " x ".join(f"{v:5.1f}" for v in size)
-        t = " x ".join(f"{v:3d}" for v in target[0])
+        t = " x ".join(f"{v:3.0f}" for v in target[0])
         off = max(abs(c) for c in centre)
         print(f"{name:18s} {s:>23s}   {t:>15s}  {off:7.1f} mm  {mass:6.3f} {mu:4.1f}  {n:5d}  "
               f"{'ok' if not problems else 'FAIL: ' + '; '.join(problems)}")

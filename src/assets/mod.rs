@@ -7,25 +7,33 @@
 //! catalogue at a directory on disk instead.
 
 pub mod objects;
+#[cfg(test)]
+mod true_size;
 pub mod urdf;
 
 use include_dir::{include_dir, Dir};
 
-/// The repository's assets/ folder, compiled in.
-static BUNDLED: Dir<'static> = include_dir!("$CARGO_MANIFEST_DIR/assets");
+/// The repository's default object models, compiled in. Only this folder: assets/ycb-meshes (the
+/// reference's meshes, LGPL) stays a directory that `--objects-dir` reads, outside the binary.
+static BUNDLED: Dir<'static> = include_dir!("$CARGO_MANIFEST_DIR/assets/objects");
 
 /// How bundled files are named in messages and reports: they have no path on disk.
 pub(crate) const BUNDLED_PREFIX: &str = "bundled:";
 
-/// A bundled text file by its path under assets/, e.g. `ur5/ur5.urdf`.
+/// A bundled text file by its path under assets/, e.g. `objects/split.json`.
 pub(crate) fn bundled_text(path: &str) -> Option<&'static str> {
-    BUNDLED.get_file(path)?.contents_utf8()
+    let inside = path.strip_prefix("objects/")?;
+    BUNDLED.get_file(inside)?.contents_utf8()
 }
 
 /// The folder names directly under a bundled folder, sorted.
 pub(crate) fn bundled_folders(path: &str) -> Vec<String> {
-    let Some(dir) = BUNDLED.get_dir(path) else {
-        return Vec::new();
+    let dir = match path {
+        "objects" => &BUNDLED,
+        _ => match path.strip_prefix("objects/").and_then(|p| BUNDLED.get_dir(p)) {
+            Some(dir) => dir,
+            None => return Vec::new(),
+        },
     };
     let mut names: Vec<String> = dir
         .dirs()
