@@ -25,11 +25,12 @@ self=$(realpath "$0")
 cd "$(dirname "$self")/.."
 root=$(pwd)
 
-tables=(pipeline training crop trials slurm pytorch latency workcell quality yardstick sweep placing collision
+tables=(objects pipeline training crop trials slurm pytorch latency workcell quality yardstick sweep placing collision
   verification centring suppression variants labelling soak faults tests webpage video)
 
 describe() {
   case $1 in
+    objects) echo "the oracle on train and test, seeds 1-3, on the bundled objects and on assets/ycb-meshes" ;;
     pipeline) echo "./demo.sh's steps timed one by one, against the Python reference" ;;
     training) echo "train --epochs 30 in fp32 and bf16: wall, seconds per epoch, images/s, best loss" ;;
     crop) echo "train --crop 64 against --crop 0 on the labels: wall, loss, train, test and empty_bin" ;;
@@ -87,17 +88,17 @@ done
 # Settings: the full run repeats BENCHMARKS.md's commands; --quick shrinks every count.
 if ((quick)); then
   EPOCHS=1 PER_OBJECT=2 TEST_SEEDS=0 HELD_TEST=3000 EMPTY_SEEDS=1 HELD_EMPTY=11 MAX_ATTEMPTS=2
-  ROUNDS=1 SCENES=2 ROUND_EPOCHS=1 SLURM_SEEDS=1-2 SPREAD_SEEDS=
+  ROUNDS=1 SCENES=2 ROUND_EPOCHS=1 SLURM_SEEDS=1-2 SPREAD_SEEDS= OBJECT_SEEDS=1
   BENCH_STEPS=2 BENCH_ROUNDS=1 SWEEP_SEEDS=1 SOAK_RANDOM=2 SOAK_MODEL=1 FUZZ_SCALE=0.01 KILLS=1
   VARIANT_LIST="rgb:1:2 rgbd:3:2"
 else
   EPOCHS=30 PER_OBJECT=12 TEST_SEEDS=0,1000,2000 HELD_TEST=3000,4000,5000 EMPTY_SEEDS=1-10
   HELD_EMPTY=11-20 MAX_ATTEMPTS=25 BENCH_STEPS=20 BENCH_ROUNDS=2 SWEEP_SEEDS="1 2 3"
   SOAK_RANDOM=200 SOAK_MODEL=20 FUZZ_SCALE=1 KILLS=10 VARIANT_LIST="rgb:1 rgbd:1 rgb:3 rgbd:3 rgbd:3:24"
-  ROUNDS=${ROUNDS:-3} SCENES=100 ROUND_EPOCHS=10 SLURM_SEEDS=1-10
+  ROUNDS=${ROUNDS:-3} SCENES=100 ROUND_EPOCHS=10 SLURM_SEEDS=1-10 OBJECT_SEEDS=1-3
   SPREAD_SEEDS=$(seq -s, 6000 1000 17000)
 fi
-export EPOCHS PER_OBJECT TEST_SEEDS HELD_TEST EMPTY_SEEDS HELD_EMPTY MAX_ATTEMPTS ROUNDS SCENES ROUND_EPOCHS SLURM_SEEDS \
+export OBJECT_SEEDS EPOCHS PER_OBJECT TEST_SEEDS HELD_TEST EMPTY_SEEDS HELD_EMPTY MAX_ATTEMPTS ROUNDS SCENES ROUND_EPOCHS SLURM_SEEDS \
   SPREAD_SEEDS
 
 out=$(realpath -m "${OUT:-target/benchmarks}")
@@ -390,6 +391,18 @@ PY
   scripts/slurm/local-cluster.sh stop "$d/cluster"
 }
 
+t_objects() {
+  local d=$out/objects set dir task
+  mkdir -p "$d"
+  for set in bundled meshes; do
+    dir=()
+    [[ $set == meshes ]] && dir=(--objects-dir "$root/assets/ycb-meshes")
+    for task in train test; do
+      eval_into "$d/$set-$task.json" "$d/data-$set" --policy oracle --task "$task" --seeds "$OBJECT_SEEDS" "${dir[@]}"
+    done
+  done
+}
+
 # Labels for the training table: the model's when it was labelled in this run, else label anew.
 labels_dir=""
 ensure_labels() {
@@ -490,6 +503,8 @@ t_verification() {
     ev model "$spec" sq0 --verify-square 0
     ev model "$spec" planner --verify-strips 2 --verify-square 0
     ev model "$spec" vt0 --verify-top 0
+    ev model "$spec" m6 --verify-margin 6
+    ev model "$spec" nopush --push-unverified false
   done
 }
 
@@ -760,6 +775,27 @@ def head(title, command):
     print()
     mode = " (`--quick`: a smoke run, not comparable)" if QUICK else ""
     print(f"{MACHINE}; commit {COMMIT}{mode}. {command}")
+    print()
+
+
+def t_objects():
+    d = f"{out}/objects"
+    head("Bundled objects against the reference's meshes",
+         f"`graspmap eval --policy oracle --task T --seeds {E['OBJECT_SEEDS']} [--objects-dir assets/ycb-meshes]`.")
+    rows, widest = [], 0
+    for task in ("train", "test"):
+        a, b = load(f"{d}/bundled-{task}.json"), load(f"{d}/meshes-{task}.json")
+        if a is None or b is None:
+            raise SystemExit(f"objects: missing {d}/bundled-{task}.json or {d}/meshes-{task}.json")
+        pb = {o["object"]: o for o in b["per_object"]}
+        for o in a["per_object"]:
+            other = pb[o["object"]]
+            widest = max(widest, abs(o["successes"] - other["successes"]))
+            rows.append([task, o["object"], f"{o['successes']}/{o['attempts']}", f"{other['successes']}/{other['attempts']}"])
+        rows.append([task, "**all**", rate(a), rate(b)])
+        rows.append([task, "sim per attempt", secs(a["timing"]["mean"]["sim"]), secs(b["timing"]["mean"]["sim"])])
+    md(["task", "object", "bundled primitives", "`--objects-dir assets/ycb-meshes`"], rows)
+    print(f"Largest difference on one object: {widest} attempts.")
     print()
 
 

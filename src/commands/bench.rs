@@ -81,10 +81,25 @@ struct Side {
     steps: usize,
 }
 
+/// The machine's convolution peak against what the network achieves, both in `precision`.
+#[derive(Debug, serde::Serialize)]
+struct Throughput {
+    /// The peak: a 256 → 256 3 × 3 convolution over a batch of 8 at 64 × 64 (38.7 GFLOP), the
+    /// shape oneDNN runs best, median of the timed steps.
+    conv_peak_gflops: f64,
+    /// Work of the 8-rotation inference (8 forward passes over 128 × 128).
+    infer_gflop: f64,
+    /// What the Rust side's 8-rotation inference achieves.
+    infer_gflops: f64,
+    /// `infer_gflops` over `conv_peak_gflops`.
+    infer_share_of_peak: f64,
+}
+
 #[derive(Debug, serde::Serialize)]
 struct BenchResults {
     precision: Precision,
     threads: u16,
+    throughput: Throughput,
     rust: Side,
     python: Option<Side>,
     /// Rust throughput over Python throughput (> 1: Rust is faster).
@@ -119,6 +134,27 @@ fn timed(steps: usize, mut step: impl FnMut()) -> Vec<f64> {
             start.elapsed().as_secs_f64()
         })
         .collect()
+}
+
+/// Times the peak convolution of [`Throughput::conv_peak_gflops`] in `precision`.
+fn conv_peak_gflops(steps: usize, precision: Precision) -> f64 {
+    let kind = match precision {
+        Precision::Fp32 => Kind::Float,
+        Precision::Bf16 => Kind::BFloat16,
+    };
+    let layout = |t: Tensor| match precision {
+        Precision::Fp32 => t,
+        Precision::Bf16 => crate::model::unet::channels_last(&t),
+    };
+    let x = layout(Tensor::rand([8, 256, 64, 64], (kind, Device::Cpu)));
+    let w = layout(Tensor::rand([256, 256, 3, 3], (kind, Device::Cpu)));
+    let flop = 2.0 * (256.0 * 256.0 * 9.0) * (8.0 * 64.0 * 64.0);
+    let mut times = timed(steps, || {
+        tch::no_grad(|| {
+            let _ = x.conv2d(&w, None::<Tensor>, [1, 1], [1, 1], [1, 1], 1);
+        })
+    });
+    flop / (median_ms(&mut times) / 1e3) / 1e9
 }
 
 /// Runs the command.
@@ -161,9 +197,18 @@ pub(crate) fn run(context: &Context, args: BenchConfig) -> anyhow::Result<()> {
     }
     let rust = side(&mut rust_train, &mut rust_infer);
     let python = (!py_train.is_empty()).then(|| side(&mut py_train, &mut py_infer));
+    let conv_peak_gflops = conv_peak_gflops(args.steps as usize, precision);
+    let infer_gflop = 8.0 * crate::model::unet::forward_flops(3, 128, 128) / 1e9;
+    let infer_gflops = infer_gflop / (rust.infer_8_rotations_ms / 1e3);
     let results = BenchResults {
         precision,
         threads: context.threads,
+        throughput: Throughput {
+            conv_peak_gflops,
+            infer_gflop,
+            infer_gflops,
+            infer_share_of_peak: infer_gflops / conv_peak_gflops,
+        },
         train_ratio: python
             .as_ref()
             .map(|p| rust.train_images_per_s / p.train_images_per_s),
@@ -257,6 +302,14 @@ fn print_results(context: &Context, results: &BenchResults) {
             ));
         }
     }
+    let t = &results.throughput;
+    context.say(&format!(
+        "8-rotation inference: {:.1} GFLOP at {:.0} GFLOP/s = {:.0} % of the machine's conv peak, {:.0} GFLOP/s (256→256 3×3 at 64×64, batch 8)",
+        t.infer_gflop,
+        t.infer_gflops,
+        100.0 * t.infer_share_of_peak,
+        t.conv_peak_gflops
+    ));
     if let (Some(t), Some(i)) = (results.train_ratio, results.infer_ratio) {
         context.say(&format!(
             "rust/python: training throughput {t:.2}×, inference speed {i:.2}×"
