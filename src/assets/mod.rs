@@ -30,7 +30,10 @@ pub(crate) fn bundled_text(path: &str) -> Option<&'static str> {
 pub(crate) fn bundled_folders(path: &str) -> Vec<String> {
     let dir = match path {
         "objects" => &BUNDLED,
-        _ => match path.strip_prefix("objects/").and_then(|p| BUNDLED.get_dir(p)) {
+        _ => match path
+            .strip_prefix("objects/")
+            .and_then(|p| BUNDLED.get_dir(p))
+        {
             Some(dir) => dir,
             None => return Vec::new(),
         },

@@ -107,7 +107,10 @@ fn surface_points(collision: &Collision) -> Vec<[f64; 3]> {
     };
     // A sphere (capsule when `half` > 0) along y: latitude rings every 1/16 of a turn.
     let round = |r: f32, half: f32| {
-        let mut points = vec![Vector::new(0.0, r + half, 0.0), Vector::new(0.0, -r - half, 0.0)];
+        let mut points = vec![
+            Vector::new(0.0, r + half, 0.0),
+            Vector::new(0.0, -r - half, 0.0),
+        ];
         for band in 0..8 {
             let polar = band as f32 * std::f32::consts::FRAC_PI_2 / 8.0;
             let (ring_r, ring_y) = (r * polar.cos(), r * polar.sin());
@@ -167,7 +170,10 @@ mod tests {
             .filter(|line| line.starts_with("| Ycb"))
             .map(|line| {
                 let cells: Vec<&str> = line.split('|').map(str::trim).collect();
-                let size: Vec<f64> = cells[4].split('×').map(|s| s.trim().parse().unwrap()).collect();
+                let size: Vec<f64> = cells[4]
+                    .split('×')
+                    .map(|s| s.trim().parse().unwrap())
+                    .collect();
                 Reference {
                     name: cells[1].to_owned(),
                     size_mm: [size[0], size[1], size[2]],
@@ -209,7 +215,10 @@ mod tests {
             let sides = size_mm(&bundled, &reference.name);
             for (got, want) in sides.iter().zip(reference.size_mm) {
                 if (got - want).abs() > (0.1 * want).max(5.0) {
-                    problems.push(format!("{} size {sides:.0?} mm, reference {:?}", reference.name, reference.size_mm));
+                    problems.push(format!(
+                        "{} size {sides:.0?} mm, reference {:?}",
+                        reference.name, reference.size_mm
+                    ));
                     break;
                 }
             }
@@ -232,7 +241,12 @@ mod tests {
         for reference in reference_table() {
             let sides = size_mm(&meshes, &reference.name);
             for (got, want) in sides.iter().zip(reference.size_mm) {
-                assert!((got - want).abs() <= 3.0, "{}: {sides:.1?} against {:?}", reference.name, reference.size_mm);
+                assert!(
+                    (got - want).abs() <= 3.0,
+                    "{}: {sides:.1?} against {:?}",
+                    reference.name,
+                    reference.size_mm
+                );
             }
         }
     }
