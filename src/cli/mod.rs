@@ -354,7 +354,7 @@ pub fn run() -> anyhow::Result<()> {
         split: cli.global.split.clone(),
     };
     let scoped = cli.command.scoped().resolve(cli.command.name(), before)?;
-    let context = resolve::context(&cli.global, scoped)?;
+    let context = cli.global.context(scoped)?;
     dispatch(&context, cli.command, &Given::of(&matches))
 }
 

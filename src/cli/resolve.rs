@@ -33,32 +33,35 @@ use crate::present::eval_report::Task;
 use crate::present::video::VideoFormat;
 use crate::sim::WorkcellConfig;
 
-/// The settings every command shares, from the global flags and the scoped flags the command
-/// took (wherever they were given).
-pub(super) fn context(global: &GlobalArgs, scoped: Resolved) -> anyhow::Result<Context> {
-    let objects = match &scoped.objects_dir {
-        Some(dir) if !dir.is_dir() => bail!(
-            "--objects-dir {} is not a directory (it should hold <Name>/model.urdf)",
-            dir.display()
-        ),
-        Some(dir) => ObjectLibrary::new(dir),
-        None => ObjectLibrary::bundled(),
-    };
-    let split = match &scoped.split {
-        Some(path) => SplitFile::Path(path.clone()),
-        None => objects.default_split(),
-    };
-    let threads = global.threads.unwrap_or_else(|| {
-        std::thread::available_parallelism().map_or(1, |n| n.get().min(u16::MAX as usize) as u16)
-    });
-    Ok(Context {
-        data: global.data.clone(),
-        objects,
-        split,
-        threads,
-        json: global.json.clone(),
-        quiet: global.quiet,
-    })
+impl GlobalArgs {
+    /// The settings every command shares, from the global flags and the scoped flags the
+    /// command took (wherever they were given).
+    pub(super) fn context(&self, scoped: Resolved) -> anyhow::Result<Context> {
+        let objects = match &scoped.objects_dir {
+            Some(dir) if !dir.is_dir() => bail!(
+                "--objects-dir {} is not a directory (it should hold <Name>/model.urdf)",
+                dir.display()
+            ),
+            Some(dir) => ObjectLibrary::new(dir),
+            None => ObjectLibrary::bundled(),
+        };
+        let split = match &scoped.split {
+            Some(path) => SplitFile::Path(path.clone()),
+            None => objects.default_split(),
+        };
+        let threads = self.threads.unwrap_or_else(|| {
+            std::thread::available_parallelism()
+                .map_or(1, |n| n.get().min(u16::MAX as usize) as u16)
+        });
+        Ok(Context {
+            data: self.data.clone(),
+            objects,
+            split,
+            threads,
+            json: self.json.clone(),
+            quiet: self.quiet,
+        })
+    }
 }
 
 /// The `--checkpoint` given, or where `predict` and `eval` find the model by default.

@@ -403,7 +403,6 @@ const CASES: &[Case] = &[
         130,
         "scenes already in",
     )
-    .without("resuming: 0 of")
     .how(How::InterruptAfter(4)),
     // A smaller or different run keeps its report beside the larger one's, never over it.
     case(
