@@ -5,6 +5,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use super::scoped::ObjectsAndSplit;
 use super::trials::parse_shard;
 use super::values::{
     fraction, named, non_negative_up_to, parse_seed_list, positive_up_to, PrecisionChoice, SeedList,
@@ -15,6 +16,7 @@ use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;
 use crate::policy::PolicyKind;
 use crate::present::eval_report::Task;
+use crate::present::kept_reports::DEFAULT_MAX_ATTEMPTS;
 
 /// `graspmap eval`.
 #[derive(Debug, Args)]
@@ -99,7 +101,7 @@ pub(crate) struct EvalArgs {
     #[arg(long)]
     pub(crate) centring: bool,
     /// empty_bin: most pick attempts per scene.
-    #[arg(long, default_value_t = 25, value_parser = clap::value_parser!(u32).range(1..))]
+    #[arg(long, default_value_t = DEFAULT_MAX_ATTEMPTS, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) max_attempts: u32,
     /// empty_bin: end a scene after K failed attempts in a row, as a robot that declares the
     /// bin done (0 = never: the reference's fixed budget of --max-attempts).
@@ -127,10 +129,12 @@ pub(crate) struct EvalArgs {
     #[arg(long, hide = true)]
     pub(crate) check_invariants: bool,
     /// Run only part of --seeds: the i-th seed given (from 0) belongs to shard i mod N + 1.
-    /// Its report (kept as DATA/reports/eval_<task>_<policy>_shard<I>of<N>.json) says which
-    /// part; `graspmap merge` joins the shards' reports into the whole sweep's.
+    /// Its report (kept in DATA/reports beside the whole sweep's, with _shard<I>of<N> before
+    /// .json) says which part; `graspmap merge` joins the shards' reports into the whole sweep's.
     #[arg(long, value_name = "I/N", value_parser = parse_shard, conflicts_with = "record")]
     pub(crate) shard: Option<Shard>,
+    #[command(flatten)]
+    pub(crate) scope: ObjectsAndSplit,
 }
 
 /// `graspmap predict`.
@@ -151,4 +155,7 @@ pub(crate) struct PredictArgs {
     /// Arithmetic of the network.
     #[arg(long, value_enum, default_value_t = PrecisionChoice::Auto)]
     pub(crate) precision: PrecisionChoice,
+    /// Replace --out when it exists.
+    #[arg(long)]
+    pub(crate) force: bool,
 }

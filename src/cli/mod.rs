@@ -12,6 +12,12 @@ use trials::parse_crop;
 pub(crate) use trials::{CollectArgs, ImproveArgs, MergeArgs, TrialArgs};
 pub(crate) use values::PrecisionChoice;
 
+mod given;
+mod outputs;
+mod scoped;
+use given::Given;
+use scoped::{ObjectsAndSplit, ObjectsArg, Scoped};
+
 use std::path::PathBuf;
 
 use anyhow::{bail, Context as _};
@@ -20,6 +26,7 @@ use clap::{Args, Parser, Subcommand};
 use crate::commands;
 use crate::commands::bench::{BenchConfig, PeerPython};
 use crate::commands::scene::SceneConfig;
+use crate::commands::Context;
 use crate::data::input::InputKind;
 use crate::model::config::TrainConfig;
 use crate::sim::WorkcellConfig;
@@ -35,22 +42,25 @@ pub(crate) struct Cli {
     pub(crate) command: Command,
 }
 
-/// Flags every command takes.
+/// Flags every command takes, and (before the command's name) the scoped flags of
+/// [`scoped`], for the commands that take them.
 #[derive(Debug, Args, Clone)]
 pub(crate) struct GlobalArgs {
     /// Data directory: labels in DIR/labels, model and evaluations in DIR/affordance.
     #[arg(long, global = true, default_value = "data", value_name = "DIR")]
     pub(crate) data: PathBuf,
-    /// Directory of object models, each <Name>/model.urdf [default: the 15 bundled models].
-    #[arg(long = "objects-dir", global = true, value_name = "DIR")]
+    /// Directory of object models (scene, grasp, label, eval, collect, improve) [default: the 15
+    /// bundled models].
+    #[arg(long = "objects-dir", value_name = "DIR")]
     pub(crate) objects_dir: Option<PathBuf>,
-    /// Train/test split JSON {"train": [..], "test": [..]} [default: <objects-dir>/split.json].
-    #[arg(long, global = true, value_name = "FILE")]
+    /// Train/test split JSON (label, eval, collect, improve) [default: <objects-dir>/split.json].
+    #[arg(long, value_name = "FILE")]
     pub(crate) split: Option<PathBuf>,
     /// Worker threads for CPU-heavy work [default: all cores].
     #[arg(long, global = true, value_name = "N", value_parser = clap::value_parser!(u16).range(1..))]
     pub(crate) threads: Option<u16>,
-    /// Also write the results as JSON to PATH ('-' = stdout).
+    /// Also write the results as JSON to PATH ('-' = stdout); an existing file is replaced only
+    /// when it is an earlier graspmap report.
     #[arg(long, global = true, value_name = "PATH")]
     pub(crate) json: Option<PathBuf>,
     /// Print only results and errors, no progress.
@@ -130,7 +140,7 @@ pub(crate) struct TrainArgs {
     #[arg(long, value_name = "PX", default_value_t = TrainConfig::default().crop, value_parser = parse_crop)]
     pub(crate) crop: u32,
     /// Also train on the trials of this store (as `graspmap collect` writes it); repeat for
-    /// several. Each trial supervises only its executed pixel and rotation.
+    /// several (each store once). Each trial supervises only its executed pixel and rotation.
     #[arg(long, value_name = "DIR")]
     pub(crate) trials: Vec<PathBuf>,
     /// Leave the labels out: train on --trials alone.
@@ -168,7 +178,20 @@ pub(crate) struct ReportArgs {
     /// --serve: the address to bind; anything but loopback prints a warning.
     #[arg(long, default_value = "127.0.0.1", requires = "serve")]
     pub(crate) host: std::net::IpAddr,
+    /// Replace an existing --out page that graspmap did not write.
+    #[arg(long)]
+    pub(crate) force: bool,
 }
+
+/// The label flags that only the scripted clicker reads.
+const SCRIPTED_ONLY: [&str; 6] = [
+    "clicks",
+    "interactive",
+    "web",
+    "check",
+    "delete",
+    "backfill_depth",
+];
 
 /// `graspmap label`.
 #[derive(Debug, Args)]
@@ -204,11 +227,13 @@ pub(crate) struct LabelArgs {
     #[arg(long, value_name = "PNG", requires = "interactive")]
     pub(crate) preview: Option<PathBuf>,
     /// Scripted clicks: standard deviation of the click position noise in pixels (0 to 64).
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative_up_to(64.0))]
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative_up_to(64.0),
+          conflicts_with_all = SCRIPTED_ONLY)]
     pub(crate) click_noise_px: f32,
     /// Scripted clicks: standard deviation of the angle noise in degrees, before snapping to
     /// 22.5° (0 to 180).
-    #[arg(long, default_value_t = 0.0, value_parser = non_negative_up_to(180.0))]
+    #[arg(long, default_value_t = 0.0, value_parser = non_negative_up_to(180.0),
+          conflicts_with_all = SCRIPTED_ONLY)]
     pub(crate) angle_noise_deg: f32,
     /// Delete existing labels and start over.
     #[arg(long, conflicts_with = "check")]
@@ -216,18 +241,20 @@ pub(crate) struct LabelArgs {
     /// Delete one label, e.g. YcbHammer:3: that object's later labels (and their sidecar files)
     /// move down one number in one crash-safe step; the next labelling run refills it.
     #[arg(long, value_name = "OBJECT:K", value_parser = parse_label_address,
-          conflicts_with_all = ["clicks", "interactive", "web", "check", "force"])]
+          conflicts_with_all = ["clicks", "interactive", "web", "check", "force", "per_object", "max_rounds", "seed", "clutter"])]
     pub(crate) delete: Option<(String, usize)>,
     /// Only validate the existing dataset; exit 2 if anything is wrong.
-    #[arg(long, conflicts_with_all = ["clicks", "interactive", "web"])]
+    #[arg(long, conflicts_with_all = ["clicks", "interactive", "web", "per_object", "max_rounds", "seed", "clutter"])]
     pub(crate) check: bool,
     /// Objects dropped per round: the round's object and K − 1 other training objects.
     #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) clutter: u32,
     /// Write the missing <Object>_<k>_depth.png of a dataset graspmap labelled before depth
     /// files existed, by replaying its rounds' drops.
-    #[arg(long, conflicts_with_all = ["check", "force", "clicks", "interactive"])]
+    #[arg(long, conflicts_with_all = ["check", "force", "clicks", "interactive", "web", "delete", "per_object", "max_rounds", "seed", "clutter"])]
     pub(crate) backfill_depth: bool,
+    #[command(flatten)]
+    pub(crate) scope: ObjectsAndSplit,
 }
 
 /// `graspmap scene`.
@@ -245,6 +272,11 @@ pub(crate) struct SceneArgs {
     /// Also write the depth image as 16-bit PNG in millimetres.
     #[arg(long, value_name = "PNG")]
     pub(crate) depth: Option<PathBuf>,
+    /// Replace --out and --depth when they exist.
+    #[arg(long)]
+    pub(crate) force: bool,
+    #[command(flatten)]
+    pub(crate) objects_dir: ObjectsArg,
 }
 
 /// `graspmap grasp`.
@@ -265,7 +297,8 @@ pub(crate) struct GraspArgs {
         long,
         value_name = "DEG",
         allow_negative_numbers = true,
-        requires = "pixel"
+        requires = "pixel",
+        conflicts_with_all = ["oracle", "random"]
     )]
     pub(crate) angle: Option<f64>,
     /// Let the oracle planner choose the grasp from ground-truth mask and depth.
@@ -283,48 +316,22 @@ pub(crate) struct GraspArgs {
     /// Also save the camera image with the grasp drawn (.png).
     #[arg(long, value_name = "PNG")]
     pub(crate) image: Option<PathBuf>,
+    /// Replace --image when it exists (--record replaces an earlier video without it).
+    #[arg(long)]
+    pub(crate) force: bool,
+    #[command(flatten)]
+    pub(crate) objects_dir: ObjectsArg,
 }
 
 /// Parses flags and runs the chosen command.
 pub fn run() -> anyhow::Result<()> {
-    let cli = match Cli::try_parse() {
-        Ok(cli) => cli,
-        Err(e) => {
-            use clap::error::ErrorKind;
-            if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
-                // `graspmap --help | head -1` closes the pipe early: the reader has what it
-                // wanted, which is no error.
-                return match e.print() {
-                    Err(io) if io.kind() != std::io::ErrorKind::BrokenPipe => Err(io.into()),
-                    _ => Ok(()),
-                };
-            }
-            if matches!(
-                e.kind(),
-                ErrorKind::MissingSubcommand | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
-            ) {
-                let names: Vec<String> = <Cli as clap::CommandFactory>::command()
-                    .get_subcommands()
-                    .map(|c| c.get_name().to_owned())
-                    .collect();
-                bail!(
-                    "no command given: choose one of {} (see graspmap --help)",
-                    names.join(", ")
-                );
-            }
-            // clap's message names the flag and the fix over a few lines; fold it into one.
-            let text = e.to_string();
-            let message = text
-                .lines()
-                .take_while(|l| !l.trim().is_empty())
-                .map(str::trim)
-                .collect::<Vec<_>>()
-                .join(" ");
-            bail!(
-                "{} (see graspmap --help)",
-                message.trim_start_matches("error: ")
-            );
-        }
+    use clap::{CommandFactory as _, FromArgMatches as _};
+    let parsed = Cli::command()
+        .try_get_matches()
+        .and_then(|matches| Cli::from_arg_matches(&matches).map(|cli| (cli, matches)));
+    let (cli, matches) = match parsed {
+        Ok(parsed) => parsed,
+        Err(e) => return parse_failure(e),
     };
     init_logging(cli.global.quiet);
     // The long writers stop at a safe point on the first Ctrl-C; the other commands keep the
@@ -342,59 +349,144 @@ pub fn run() -> anyhow::Result<()> {
     {
         crate::interrupt::install().context("installing the Ctrl-C handler")?;
     }
-    refuse_unused_globals(&cli.global, &cli.command)?;
-    let context = cli.global.context()?;
-    if let Some(json) = &context.json {
-        crate::data::output::check_output_file(json, "--json")?;
+    let before = scoped::Resolved {
+        objects_dir: cli.global.objects_dir.clone(),
+        split: cli.global.split.clone(),
+    };
+    let scoped = cli.command.scoped().resolve(cli.command.name(), before)?;
+    let context = cli.global.context(scoped)?;
+    dispatch(&context, cli.command, &Given::of(&matches))
+}
+
+/// A command line clap refused (or `--help`, `--version`): one line on stderr, exit status 2.
+fn parse_failure(e: clap::Error) -> anyhow::Result<()> {
+    use clap::error::ErrorKind;
+    if matches!(e.kind(), ErrorKind::DisplayHelp | ErrorKind::DisplayVersion) {
+        // `graspmap --help | head -1` closes the pipe early: the reader has what it
+        // wanted, which is no error.
+        return match e.print() {
+            Err(io) if io.kind() != std::io::ErrorKind::BrokenPipe => Err(io.into()),
+            _ => Ok(()),
+        };
     }
+    if matches!(
+        e.kind(),
+        ErrorKind::MissingSubcommand | ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand
+    ) {
+        let names: Vec<String> = <Cli as clap::CommandFactory>::command()
+            .get_subcommands()
+            .map(|c| c.get_name().to_owned())
+            .collect();
+        bail!(
+            "no command given: choose one of {} (see graspmap --help)",
+            names.join(", ")
+        );
+    }
+    // clap's message names the flag and the fix over a few lines; fold it into one.
+    let text = e.to_string();
+    let message = text
+        .lines()
+        .take_while(|l| !l.trim().is_empty())
+        .map(str::trim)
+        .collect::<Vec<_>>()
+        .join(" ");
+    bail!(
+        "{} (see graspmap --help)",
+        message.trim_start_matches("error: ")
+    );
+}
+
+/// Resolves the command's flags into its config, checks every file it will read and write
+/// (outputs::check), and runs it.
+fn dispatch(context: &Context, command: Command, given: &Given) -> anyhow::Result<()> {
     let data = context.data.clone();
-    match cli.command {
-        Command::Scene(args) => commands::scene::run(
-            &context,
-            SceneConfig {
+    match command {
+        Command::Scene(args) => {
+            let config = SceneConfig {
                 objects: args.objects,
                 seed: args.seed,
                 out: args.out,
                 depth: args.depth,
-            },
-        ),
-        Command::Grasp(args) => commands::grasp::run(&context, args.config()?),
-        Command::Label(args) => commands::label::run(&context, args.config(&data)),
-        Command::Train(args) => commands::train::run(&context, args.options(&data)),
+            };
+            outputs::scene(context, &config, args.force).check()?;
+            commands::scene::run(context, config)
+        }
+        Command::Grasp(args) => {
+            let force = args.force;
+            let config = args.config()?;
+            outputs::grasp(context, &config, force).check()?;
+            commands::grasp::run(context, config)
+        }
+        Command::Label(args) => {
+            let config = args.config(&data);
+            outputs::label(context, &config).check()?;
+            commands::label::run(context, config)
+        }
+        Command::Train(args) => {
+            let options = args.options(&data, given)?;
+            outputs::train(context, &options).check()?;
+            commands::train::run(context, options)
+        }
         Command::Eval(args) => {
-            let config = args.config(&data)?;
-            commands::eval::run(&context, config)
+            let config = args.config(&data, given)?;
+            outputs::eval(context, &config).check()?;
+            commands::eval::run(context, config)
         }
         Command::Collect(args) => match args.check {
             true => {
-                commands::collect::check(&context, &args.out.unwrap_or_else(|| data.join("trials")))
+                outputs::base(context, None).check()?;
+                commands::collect::check(context, &args.out.unwrap_or_else(|| data.join("trials")))
             }
-            false => commands::collect::run(&context, args.config(&data)?),
+            false => {
+                let config = args.config(&data, given)?;
+                outputs::collect(context, &config).check()?;
+                commands::collect::run(context, config)
+            }
         },
-        Command::Merge(args) => commands::merge::run(
-            &context,
-            commands::merge::MergeConfig {
+        Command::Merge(args) => {
+            let config = commands::merge::MergeConfig {
                 inputs: args.inputs,
                 out: args.out,
                 allow_partial: args.allow_partial,
-            },
-        ),
-        Command::Improve(args) => commands::improve::run(&context, args.config(&data)?),
-        Command::Predict(args) => commands::predict::run(&context, args.config(&data)),
-        Command::Report(args) => commands::report::run(&context, args.config(&data)?),
-        Command::Bench(BenchCommand::Train(args)) => commands::bench::run(
-            &context,
-            BenchConfig {
-                steps: args.steps,
-                rounds: args.rounds,
-                precision: args.precision.resolve(),
-                peer: match (args.no_peer, args.python) {
-                    (true, _) => None,
-                    (false, Some(path)) => Some(PeerPython::Given(path)),
-                    (false, None) => Some(PeerPython::Checkout),
+            };
+            outputs::merge(context, &config, args.force)?.check()?;
+            commands::merge::run(context, config)
+        }
+        Command::Improve(args) => {
+            let config = args.config(&data, given)?;
+            outputs::improve(context, &config).check()?;
+            commands::improve::run(context, config)
+        }
+        Command::Predict(args) => {
+            let (force, named) = (args.force, args.out.is_some());
+            let config = args.config(&data);
+            outputs::predict(context, &config, force, named).check()?;
+            commands::predict::run(context, config)
+        }
+        Command::Report(args) => {
+            let (force, named) = (args.force, args.out.is_some());
+            let config = args.config(&data)?;
+            outputs::report(context, &config, force, named)?.check()?;
+            commands::report::run(context, config)
+        }
+        Command::Bench(BenchCommand::Train(args)) => {
+            let mut files = outputs::base(context, None);
+            files.input("the --python this command runs", args.python.as_deref());
+            files.check()?;
+            commands::bench::run(
+                context,
+                BenchConfig {
+                    steps: args.steps,
+                    rounds: args.rounds,
+                    precision: args.precision.resolve(),
+                    peer: match (args.no_peer, args.python) {
+                        (true, _) => None,
+                        (false, Some(path)) => Some(PeerPython::Given(path)),
+                        (false, None) => Some(PeerPython::Checkout),
+                    },
                 },
-            },
-        ),
+            )
+        }
     }
 }
 
@@ -416,38 +508,30 @@ impl Command {
         }
     }
 
-    /// Whether the command loads object models, and whether it reads the train/test split.
-    fn reads_objects_and_split(&self) -> (bool, bool) {
+    /// The scoped flags the command takes, as given after its name.
+    fn scoped(&self) -> Scoped<'_> {
         match self {
-            Command::Scene(_) | Command::Grasp(_) => (true, false),
-            Command::Label(_) | Command::Eval(_) | Command::Collect(_) | Command::Improve(_) => {
-                (true, true)
-            }
+            Command::Scene(a) => Scoped {
+                objects: Some(&a.objects_dir),
+                split: None,
+            },
+            Command::Grasp(a) => Scoped {
+                objects: Some(&a.objects_dir),
+                split: None,
+            },
+            Command::Label(a) => a.scope.scoped(),
+            Command::Eval(a) => a.scope.scoped(),
+            Command::Collect(a) => a.scope.scoped(),
+            Command::Improve(a) => a.scope.scoped(),
             Command::Train(_)
-            | Command::Merge(_)
             | Command::Predict(_)
             | Command::Report(_)
-            | Command::Bench(_) => (false, false),
+            | Command::Bench(_)
+            | Command::Merge(_) => Scoped::default(),
         }
     }
 }
 
-/// A global flag that the command would ignore is an error, not a silent no-op.
-fn refuse_unused_globals(global: &GlobalArgs, command: &Command) -> anyhow::Result<()> {
-    let (objects, split) = command.reads_objects_and_split();
-    let name = command.name();
-    if global.objects_dir.is_some() && !objects {
-        bail!(
-            "--objects-dir is not used by `graspmap {name}` (scene, grasp, label, eval, collect and improve load objects); leave it out"
-        );
-    }
-    if global.split.is_some() && !split {
-        bail!(
-            "--split is not used by `graspmap {name}` (label, eval, collect and improve read the split); leave it out"
-        );
-    }
-    Ok(())
-}
 fn init_logging(quiet: bool) {
     let default = if quiet { "warn" } else { "info" };
     let filter = tracing_subscriber::EnvFilter::try_from_env("GRASPMAP_LOG")

@@ -5,6 +5,8 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _};
 
+use super::given::{refuse_inapplicable, Given};
+use super::scoped::Resolved;
 use super::{
     CollectArgs, EvalArgs, GlobalArgs, GraspArgs, ImproveArgs, LabelArgs, PredictArgs, ReportArgs,
     TrainArgs, TrialArgs,
@@ -18,19 +20,24 @@ use crate::commands::label::{ClickNoise, ClickSource, LabelConfig};
 use crate::commands::predict::PredictConfig;
 use crate::commands::report::ReportConfig;
 use crate::commands::train::TrainOptions;
-use crate::commands::Context;
+use crate::commands::{Context, RunBy};
+use crate::data::output::identity;
 use crate::data::trials::Shard;
 use crate::grasp::PixelGrasp;
 use crate::model::config::TrainConfig;
+use crate::named::Named;
 use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;
+use crate::policy::PolicyKind;
+use crate::present::eval_report::Task;
 use crate::present::video::VideoFormat;
 use crate::sim::WorkcellConfig;
 
 impl GlobalArgs {
-    /// The settings every command shares.
-    pub(super) fn context(&self) -> anyhow::Result<Context> {
-        let objects = match &self.objects_dir {
+    /// The settings every command shares, from the global flags and the scoped flags the
+    /// command took (wherever they were given).
+    pub(super) fn context(&self, scoped: Resolved) -> anyhow::Result<Context> {
+        let objects = match &scoped.objects_dir {
             Some(dir) if !dir.is_dir() => bail!(
                 "--objects-dir {} is not a directory (it should hold <Name>/model.urdf)",
                 dir.display()
@@ -38,7 +45,7 @@ impl GlobalArgs {
             Some(dir) => ObjectLibrary::new(dir),
             None => ObjectLibrary::bundled(),
         };
-        let split = match &self.split {
+        let split = match &scoped.split {
             Some(path) => SplitFile::Path(path.clone()),
             None => objects.default_split(),
         };
@@ -62,8 +69,60 @@ fn checkpoint_path(data: &Path, given: Option<PathBuf>) -> PathBuf {
     given.unwrap_or_else(|| data.join("affordance").join("best.safetensors"))
 }
 
+/// eval flags that only empty_bin reads: the attempt budget, and failure suppression (in train
+/// and test every attempt drops its object afresh, so there is nothing to remember).
+const EMPTY_BIN_ONLY: &[&str] = &[
+    "max_attempts",
+    "give_up_after",
+    "n_past_action",
+    "suppression_sigma",
+    "suppress_rotation_reach",
+    "suppress_other_rotations",
+    "suppress_successes",
+];
+/// eval flags that only the model policy reads.
+const EVAL_MODEL_ONLY: &[&str] = &[
+    "checkpoint",
+    "precision",
+    "collision_check",
+    "verify_top",
+    "verify_floor",
+    "verify_rejected",
+    "verify_strips",
+    "verify_square",
+    "verify_margin",
+    "centring",
+    "push_unverified",
+    "suppression_sigma",
+    "suppress_rotation_reach",
+    "suppress_other_rotations",
+];
+/// Failure memory: the model lowers its maps, the oracle reorders its objects; random ignores it.
+const REMEMBERING: &[&str] = &["n_past_action", "suppress_successes"];
+/// Trial flags of the model's turns (`--policy model` and `mix`).
+const EXPLORING: &[&str] = &["explore", "temperature"];
+/// The model's own flags in `collect` (in `improve` the checkpoint also starts the training).
+const COLLECT_MODEL_ONLY: &[&str] = &["checkpoint", "precision"];
+
 impl EvalArgs {
-    pub(super) fn config(self, data: &Path) -> anyhow::Result<EvalConfig> {
+    /// Refuses the flags that this task and policy would not read.
+    fn refuse_inapplicable(&self, given: &Given) -> anyhow::Result<()> {
+        let task = format!("--task {}", self.task.name());
+        let policy = format!("--policy {}", self.policy.name());
+        if self.task != Task::EmptyBin {
+            refuse_inapplicable(given, EMPTY_BIN_ONLY, "--task empty_bin", &task)?;
+        }
+        if self.policy != PolicyKind::Model {
+            refuse_inapplicable(given, EVAL_MODEL_ONLY, "--policy model", &policy)?;
+        }
+        if self.policy == PolicyKind::Random {
+            refuse_inapplicable(given, REMEMBERING, "--policy model and oracle", &policy)?;
+        }
+        Ok(())
+    }
+
+    pub(super) fn config(self, data: &Path, given: &Given) -> anyhow::Result<EvalConfig> {
+        self.refuse_inapplicable(given)?;
         let model = ModelPolicyConfig {
             check: self.collision_check,
             verify_top: self.verify_top,
@@ -111,6 +170,7 @@ impl EvalArgs {
             resume: self.resume,
             check_invariants: self.check_invariants,
             shard: self.shard.unwrap_or(Shard::WHOLE),
+            run_by: RunBy::Own,
         })
     }
 }
@@ -138,21 +198,42 @@ impl TrialArgs {
             },
             shard: Shard::WHOLE,
             force: false,
+            run_by: RunBy::Own,
         }
     }
 }
 
-impl CollectArgs {
-    pub(super) fn config(self, data: &Path) -> anyhow::Result<CollectConfig> {
-        if let (Some(path), CollectPolicy::Oracle | CollectPolicy::Random) =
-            (&self.trials.checkpoint, self.trials.policy)
-        {
-            bail!(
-                "--checkpoint {} is used only by --policy model and mix, and this run is --policy {}; leave it out",
-                path.display(),
-                self.trials.policy
-            );
+impl TrialArgs {
+    /// Refuses the trial flags that this policy would not read; `model_only` are those of the
+    /// model's own, beyond exploring.
+    fn refuse_inapplicable(&self, given: &Given, model_only: &[&str]) -> anyhow::Result<()> {
+        let policy = format!("--policy {}", self.policy);
+        let exploring = EXPLORING
+            .iter()
+            .chain(model_only)
+            .copied()
+            .collect::<Vec<_>>();
+        if matches!(self.policy, CollectPolicy::Oracle | CollectPolicy::Random) {
+            refuse_inapplicable(given, &exploring, "--policy model and mix", &policy)?;
         }
+        if self.policy != CollectPolicy::Mix {
+            refuse_inapplicable(given, &["oracle_share"], "--policy mix", &policy)?;
+        }
+        if self.policy == CollectPolicy::Random {
+            refuse_inapplicable(
+                given,
+                &["n_past_action"],
+                "--policy model, mix and oracle",
+                &policy,
+            )?;
+        }
+        Ok(())
+    }
+}
+
+impl CollectArgs {
+    pub(super) fn config(self, data: &Path, given: &Given) -> anyhow::Result<CollectConfig> {
+        self.trials.refuse_inapplicable(given, COLLECT_MODEL_ONLY)?;
         let out = self.out.unwrap_or_else(|| data.join("trials"));
         let mut config = self
             .trials
@@ -164,7 +245,8 @@ impl CollectArgs {
 }
 
 impl ImproveArgs {
-    pub(super) fn config(self, data: &Path) -> anyhow::Result<ImproveConfig> {
+    pub(super) fn config(self, data: &Path, given: &Given) -> anyhow::Result<ImproveConfig> {
+        self.trials.refuse_inapplicable(given, &[])?;
         let out = self.out.unwrap_or_else(|| data.join("improve"));
         let start = checkpoint_path(data, self.trials.checkpoint.clone());
         let precision = self.trials.precision.resolve();
@@ -275,8 +357,35 @@ impl LabelArgs {
 }
 
 impl TrainArgs {
-    pub(super) fn options(self, data: &Path) -> TrainOptions {
-        TrainOptions {
+    pub(super) fn options(self, data: &Path, given: &Given) -> anyhow::Result<TrainOptions> {
+        if self.trials.is_empty() {
+            if let Some(flag) = given.first_of(&["trial_weight", "trial_sigma"]) {
+                bail!("{flag} weights the trials of --trials DIR, and none is given; add --trials DIR, or leave {flag} out");
+            }
+        }
+        let out_dir = self.out_dir.unwrap_or_else(|| data.join("affordance"));
+        for (i, store) in self.trials.iter().enumerate() {
+            if let Some(twin) = self.trials[..i]
+                .iter()
+                .find(|t| identity(t) == identity(store))
+            {
+                let also = match twin == store {
+                    true => String::new(),
+                    false => format!(" (also as --trials {})", twin.display()),
+                };
+                bail!(
+                    "--trials {} is given twice{also}; give each trial store once",
+                    store.display()
+                );
+            }
+            if identity(store) == identity(&out_dir) {
+                bail!(
+                    "--trials {} is also where the model goes (--out-dir); give another --out-dir",
+                    store.display()
+                );
+            }
+        }
+        Ok(TrainOptions {
             config: TrainConfig {
                 epochs: self.epochs,
                 batch_size: self.batch_size as usize,
@@ -291,11 +400,12 @@ impl TrainArgs {
             },
             resume: self.resume,
             force: self.force,
-            out_dir: self.out_dir.unwrap_or_else(|| data.join("affordance")),
+            out_dir,
             labels: (!self.no_labels).then(|| data.join("labels")),
             trials: self.trials,
             start_from: self.start_from,
-        }
+            run_by: RunBy::Own,
+        })
     }
 }
 
@@ -315,5 +425,40 @@ impl ReportArgs {
             out,
             serve: self.serve.then_some((self.host, self.port)),
         })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The refusals look flags up by id: each id must be one of the command's flags (a typo
+    /// would never match, and the flag would be accepted silently).
+    #[test]
+    fn every_flag_a_refusal_names_is_one_of_the_command_s() {
+        use clap::CommandFactory;
+        let cli = super::super::Cli::command();
+        let lists: [(&str, &[&str]); 9] = [
+            ("eval", EMPTY_BIN_ONLY),
+            ("eval", EVAL_MODEL_ONLY),
+            ("eval", REMEMBERING),
+            ("collect", EXPLORING),
+            ("collect", COLLECT_MODEL_ONLY),
+            ("collect", &["oracle_share", "n_past_action"]),
+            ("improve", EXPLORING),
+            ("improve", &["oracle_share", "n_past_action"]),
+            ("train", &["trial_weight", "trial_sigma"]),
+        ];
+        for (command, ids) in lists {
+            let known: Vec<String> = cli
+                .find_subcommand(command)
+                .unwrap()
+                .get_arguments()
+                .map(|a| a.get_id().to_string())
+                .collect();
+            for id in ids {
+                assert!(known.iter().any(|k| k == id), "{command} has no flag {id}");
+            }
+        }
     }
 }

@@ -4,6 +4,7 @@ use std::path::PathBuf;
 
 use clap::Args;
 
+use super::scoped::ObjectsAndSplit;
 use super::values::{fraction, named, parse_seed_list, positive_up_to, PrecisionChoice, SeedList};
 use crate::commands::collect::CollectPolicy;
 use crate::commands::improve::ROUND_LR;
@@ -30,9 +31,11 @@ pub(crate) struct CollectArgs {
     /// Delete the store's scenes and start over.
     #[arg(long, conflicts_with = "check")]
     pub(crate) force: bool,
-    /// Only validate the store; exit 2 if anything is wrong.
-    #[arg(long)]
+    /// Only validate the store (--out, or DATA/trials); exit 2 if anything is wrong.
+    #[arg(long, conflicts_with_all = ["seed", "scenes", "shard", "clutter", "max_attempts", "policy", "explore", "temperature", "oracle_share", "n_past_action", "checkpoint", "precision", "objects_dir", "split"])]
     pub(crate) check: bool,
+    #[command(flatten)]
+    pub(crate) scope: ObjectsAndSplit,
 }
 
 /// How trials are collected: shared by `collect` and `improve`.
@@ -78,12 +81,16 @@ pub(crate) struct MergeArgs {
     /// The shard stores, as `collect --shard I/N` wrote them.
     #[arg(required = true, value_name = "SHARD_DIR")]
     pub(crate) inputs: Vec<PathBuf>,
-    /// The merged store: a new (or empty) folder.
+    /// The merged trial store, a new (or empty) folder; or for eval shard reports, the merged
+    /// report file.
     #[arg(long, value_name = "DIR")]
     pub(crate) out: PathBuf,
     /// Merge the shards that are there when some are missing; the store says which.
     #[arg(long)]
     pub(crate) allow_partial: bool,
+    /// Replace an existing --out report file (never one of the inputs).
+    #[arg(long)]
+    pub(crate) force: bool,
 }
 
 /// `graspmap improve`.
@@ -120,6 +127,8 @@ pub(crate) struct ImproveArgs {
     /// Where the rounds go [default: DATA/improve].
     #[arg(long, value_name = "DIR")]
     pub(crate) out: Option<PathBuf>,
+    #[command(flatten)]
+    pub(crate) scope: ObjectsAndSplit,
 }
 
 /// `--shard` values.

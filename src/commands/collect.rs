@@ -8,7 +8,7 @@ use anyhow::{bail, Context as _};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
-use super::{workers, Context};
+use super::{workers, Context, RunBy};
 use crate::assets::objects::ObjectModel;
 use crate::data::lock::StoreLock;
 use crate::data::output::check_output_dir;
@@ -71,6 +71,8 @@ pub(crate) struct CollectConfig {
     pub(crate) model: ModelPolicyConfig,
     /// Failure suppression within a scene.
     pub(crate) suppression: SuppressionConfig,
+    /// Who runs it, for the advice of its errors.
+    pub(crate) run_by: RunBy,
     /// The part of the scenes this run collects.
     pub(crate) shard: Shard,
     /// Start the store over.
@@ -263,20 +265,30 @@ fn prepare(
                 false => String::new(),
             };
             bail!(
-                "{} holds trials collected with other settings{shard_note}{}; rerun with those, pass --out another folder, or --force to start over",
+                "{} holds trials collected with other settings{shard_note}{}; {}",
                 store.dir().display(),
                 match differ.is_empty() {
                     true => String::new(),
                     false => format!(" (differing: {})", differ.join(", ")),
+                },
+                match config.run_by {
+                    RunBy::Own =>
+                        "rerun with those, pass --out another folder, or --force to start over",
+                    RunBy::Improve =>
+                        "rerun improve with those, or give improve another --out folder",
                 }
             );
         }
         return Ok(());
     } else if !store.scenes()?.is_empty() {
         bail!(
-            "{} holds scene folders but no {}; it is not a store graspmap can continue: pass --force to start over, or --out another folder",
+            "{} holds scene folders but no {}; it is not a store graspmap can continue: {}",
             store.dir().display(),
-            crate::data::trials::MANIFEST_FILE
+            crate::data::trials::MANIFEST_FILE,
+            match config.run_by {
+                RunBy::Own => "pass --force to start over, or --out another folder",
+                RunBy::Improve => "remove that folder, or give improve another --out folder",
+            }
         );
     }
     store.save_manifest(&manifest)

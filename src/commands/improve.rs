@@ -14,7 +14,7 @@ use anyhow::Context as _;
 use super::collect::CollectConfig;
 use super::eval::{pushes_by_default, EvalConfig};
 use super::train::TrainOptions;
-use super::Context;
+use super::{Context, RunBy};
 use crate::data::atomic::write_atomic;
 use crate::data::trials::TrialStore;
 use crate::model::config::TrainConfig;
@@ -23,6 +23,7 @@ use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;
 use crate::policy::PolicyKind;
 use crate::present::eval_report::Task;
+use crate::present::kept_reports::DEFAULT_MAX_ATTEMPTS;
 
 /// The learning rate of a round's retraining. It starts from a model that already fits the
 /// labels, and at train's 1e-3 a round could unlearn them where no trial looks: on one machine
@@ -100,6 +101,7 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
             out: dir.join("trials"),
             seed: round_seed(config.collect.seed, round),
             checkpoint: current.clone(),
+            run_by: RunBy::Improve,
             ..config.collect.clone()
         };
         super::collect::run(context, collect.clone())?;
@@ -126,6 +128,7 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
             labels: Some(config.labels.clone()),
             trials: stores.clone(),
             start_from: Some(current.clone()),
+            run_by: RunBy::Improve,
         };
         super::train::run(context, train)?;
         let train_seconds = train_start.elapsed().as_secs_f64();
@@ -142,9 +145,10 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
             None => None,
         };
         let (trials, successes) = count_trials(&collect.out)?;
-        let best_val_loss = crate::model::checkpoint::read(&model, "rerun the round")?
-            .meta
-            .map_or(f64::NAN, |m| m.best_val_loss);
+        let best_val_loss =
+            crate::model::checkpoint::read(&model, "rerun the same improve command")?
+                .meta
+                .map_or(f64::NAN, |m| m.best_val_loss);
         summaries.push(RoundSummary {
             round,
             collected_with: current.clone(),
@@ -234,13 +238,14 @@ fn evaluate(
             ..SuppressionConfig::default()
         },
         model: ModelPolicyConfig::default(),
-        max_attempts: 25,
+        max_attempts: DEFAULT_MAX_ATTEMPTS,
         give_up_after: 0,
         push_unverified: pushes_by_default(Task::EmptyBin),
         record: None,
         resume: false,
         check_invariants: false,
         shard: crate::data::trials::Shard::WHOLE,
+        run_by: RunBy::Improve,
     };
     super::eval::run(&eval_context, config)?;
     let text = std::fs::read_to_string(&report)

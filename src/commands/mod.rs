@@ -17,6 +17,18 @@ use std::path::{Path, PathBuf};
 
 use crate::assets::objects::{ObjectLibrary, Split, SplitFile};
 
+/// Who runs a stage (`collect`, `train`, `eval`): its own command, or `improve`, whose flags
+/// differ (no `--force`, `--resume` or `--out-dir`); the advice of a stage's errors names only
+/// flags that the command the user typed has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub(crate) enum RunBy {
+    /// The stage's own command.
+    #[default]
+    Own,
+    /// A round of `graspmap improve`.
+    Improve,
+}
+
 /// Settings shared by every command, resolved once by the CLI from the global flags.
 #[derive(Debug, Clone)]
 pub(crate) struct Context {

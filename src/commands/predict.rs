@@ -9,7 +9,7 @@ use super::Context;
 use crate::data::atomic::save_image_atomic;
 use crate::data::input::{read_depth_png, InputKind, NetInput};
 use crate::data::observation::read_observation;
-use crate::data::output::check_output_file_in;
+use crate::data::output::check_output_file;
 use crate::model::inference::{AffordanceModel, Scored};
 use crate::model::maps::{visualisation, Choice};
 use crate::model::unet::Precision;
@@ -53,7 +53,7 @@ pub(crate) struct PredictResults {
 
 /// Runs the command.
 pub(crate) fn run(context: &Context, args: PredictConfig) -> anyhow::Result<()> {
-    check_output_file_in(&args.out, "--out", &context.data)?;
+    check_output_file(&args.out, "--out")?;
     let image = read_observation(&args.image)?;
     let checkpoint = &args.checkpoint;
     crate::model::use_threads(context.threads);

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use super::Context;
 use crate::data::labels::LabelStore;
-use crate::data::output::{check_output_dir, check_output_file_in};
+use crate::data::output::{check_output_dir, check_output_file};
 use crate::present::envelope::write_report;
 use crate::present::report_page::{files_dir, write_report_page};
 use crate::present::web::labels_page::{self, DiskLabels};
@@ -24,7 +24,7 @@ pub(crate) struct ReportConfig {
 
 /// Runs the command.
 pub(crate) fn run(context: &Context, config: ReportConfig) -> anyhow::Result<()> {
-    check_output_file_in(&config.out, "--out", &context.data)?;
+    check_output_file(&config.out, "--out")?;
     check_output_dir(&files_dir(&config.out), "the report's files folder")?;
     let written = write_report_page(&context.data, &config.out)?;
     context.say(&format!(

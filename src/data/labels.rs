@@ -390,18 +390,8 @@ impl LabelStore {
                 }
                 let path = self.image_path(object, k);
                 expected.insert(path.clone());
-                match image::image_dimensions(&path) {
-                    Err(image::ImageError::IoError(e))
-                        if e.kind() == std::io::ErrorKind::NotFound =>
-                    {
-                        problems.push(format!("{}: missing image", path.display()))
-                    }
-                    Err(e) => problems.push(format!("{}: unreadable image: {e}", path.display())),
-                    Ok((w, h)) if (w, h) != (IMAGE_SIZE, IMAGE_SIZE) => problems.push(format!(
-                        "{}: image is {w}×{h}, expected {IMAGE_SIZE}×{IMAGE_SIZE}",
-                        path.display()
-                    )),
-                    Ok(_) => {}
+                if let Some(problem) = image_problem(&path) {
+                    problems.push(problem);
                 }
             }
         }
@@ -421,6 +411,38 @@ impl LabelStore {
         }
         problems
     }
+}
+
+/// What is wrong with a label's image, as training would find it: missing, unreadable or cut
+/// short (every pixel is decoded), or not 128 × 128 8-bit RGB.
+fn image_problem(path: &Path) -> Option<String> {
+    if !path.exists() {
+        return Some(format!("{}: missing image", path.display()));
+    }
+    let decoded = match image::open(path) {
+        Ok(decoded) => decoded,
+        Err(e) => {
+            return Some(format!(
+                "{}: unreadable or truncated image ({e}); restore it, or relabel",
+                path.display()
+            ))
+        }
+    };
+    let (w, h, color) = (decoded.width(), decoded.height(), decoded.color());
+    if (w, h) != (IMAGE_SIZE, IMAGE_SIZE) {
+        return Some(format!(
+            "{}: image is {w}×{h}, expected {IMAGE_SIZE}×{IMAGE_SIZE}",
+            path.display()
+        ));
+    }
+    if color != image::ColorType::Rgb8 {
+        return Some(format!(
+            "{}: image is {color:?} ({} bits per pixel), expected 8-bit RGB (Rgb8)",
+            path.display(),
+            color.bits_per_pixel()
+        ));
+    }
+    None
 }
 
 /// Where labelling stands per object, so that a rerun continues from the right round.
@@ -477,7 +499,7 @@ impl Progress {
     pub(crate) fn parse(text: &str, path: &Path) -> anyhow::Result<Self> {
         let mut progress: Progress = serde_json::from_str(text).with_context(|| {
             format!(
-                "{} is corrupt (delete it or rerun with --force)",
+                "{} is corrupt (delete it, or start over with graspmap label --force)",
                 path.display()
             )
         })?;

@@ -3,8 +3,11 @@
 //! read-only data directory or a mistyped `--json` path fails in a second with one line that
 //! names the path, says why and gives the fix, not after an hour of simulation.
 //!
-//! The check creates what a command would create anyway (the folders under the data directory)
-//! and probes each folder with a file that it removes at once.
+//! The check creates the folders an output needs (a missing parent folder is created, not
+//! refused) and probes each folder with a file that it removes at once. [`check_outputs`] also
+//! makes sure that no output replaces one of the command's inputs (never, even with `--force`),
+//! another output of the same run, or an existing file that is not an earlier output of the
+//! same kind (unless `--force`).
 
 use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
@@ -15,12 +18,27 @@ pub enum OutputError {
     /// The path names a folder where a file is wanted.
     #[error("{what} {path} is a directory; give the path of a file (inside it, or elsewhere)")]
     IsDirectory { what: String, path: PathBuf },
-    /// The folder that would hold the file does not exist.
-    #[error("{what} {path}: the folder {parent} does not exist; create it first, or choose another path")]
-    MissingParent {
+    /// The output is one of the command's inputs.
+    #[error("{what} {path} is also {input}; write the output to another path (--force never replaces an input)")]
+    IsInput {
         what: String,
         path: PathBuf,
-        parent: PathBuf,
+        input: String,
+    },
+    /// Two outputs of one run name the same file.
+    #[error("{what} and {other} both name {path}; give each output its own path")]
+    SameAsOther {
+        what: String,
+        other: String,
+        path: PathBuf,
+    },
+    /// The file exists, and this run may not replace it.
+    #[error("{what} {path} already exists{why}; {fix}")]
+    Exists {
+        what: String,
+        path: PathBuf,
+        why: String,
+        fix: &'static str,
     },
     /// Something on the way is a file, not a folder.
     #[error("{what} {path}: {blocker} is a file, not a folder; choose another path")]
@@ -54,8 +72,7 @@ fn parent_of(path: &Path) -> PathBuf {
 
 /// Checks that `path` can be written as a file, the way the atomic writer writes it (a
 /// temporary file beside it, then a rename); `what` names it in errors, e.g. `--json`. `-`
-/// (stdout) always passes. The folder must exist: a missing one is more often a typo than a
-/// wish.
+/// (stdout) always passes. A missing folder on the way is created.
 pub(crate) fn check_output_file(path: &Path, what: &str) -> Result<(), OutputError> {
     if path == Path::new("-") {
         return Ok(());
@@ -67,28 +84,228 @@ pub(crate) fn check_output_file(path: &Path, what: &str) -> Result<(), OutputErr
         });
     }
     let parent = parent_of(path);
-    if !parent.exists() {
-        return Err(OutputError::MissingParent {
-            what: what.to_owned(),
-            path: path.to_path_buf(),
-            parent,
+    if !parent.is_dir() {
+        return check_output_dir(&parent, what).map_err(|e| match e {
+            OutputError::NotWritable {
+                what,
+                folder,
+                reason,
+                fix,
+                ..
+            } => OutputError::NotWritable {
+                what,
+                path: path.to_path_buf(),
+                folder,
+                reason,
+                fix,
+            },
+            OutputError::NotAFolder { what, blocker, .. } => OutputError::NotAFolder {
+                what,
+                path: path.to_path_buf(),
+                blocker,
+            },
+            other => other,
         });
     }
     probe(&parent, path, what)
 }
 
-/// [`check_output_file`] for a path that may lie under the data directory `data`, where the
-/// command creates the folders it needs (a default output, say); elsewhere the folder must exist.
-pub(crate) fn check_output_file_in(
-    path: &Path,
-    what: &str,
-    data: &Path,
-) -> Result<(), OutputError> {
-    let parent = parent_of(path);
-    if parent.starts_with(data) && !parent.exists() {
-        check_output_dir(&parent, what)?;
+/// What an existing file at an output's path may be replaced as.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Existing {
+    /// The command's own file under the data directory (a default path): replaced.
+    Replace,
+    /// Replaced when it is an earlier output of this kind, else only with `--force`.
+    Own(Kind),
+    /// Replaced only with `--force`.
+    Force,
+}
+
+/// Kinds of output that a rerun replaces without `--force`: what graspmap wrote there before.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Kind {
+    /// A `--json` report (`"schema": "graspmap.…"`).
+    JsonReport,
+    /// A `--record` video (MP4 or GIF).
+    Video,
+    /// `graspmap report`'s page.
+    ReportPage,
+    /// `label --interactive`'s 512 × 512 preview image.
+    Preview,
+}
+
+impl Kind {
+    fn name(self) -> &'static str {
+        match self {
+            Kind::JsonReport => "graspmap report",
+            Kind::Video => "video",
+            Kind::ReportPage => "graspmap report page",
+            Kind::Preview => "labelling preview",
+        }
     }
-    check_output_file(path, what)
+
+    /// Whether the file at `path` is an earlier output of this kind.
+    fn holds(self, path: &Path) -> bool {
+        use std::io::Read as _;
+        if self == Kind::Preview {
+            return image::image_dimensions(path).is_ok_and(|d| d == (512, 512));
+        }
+        let mut head = Vec::new();
+        let read = std::fs::File::open(path).and_then(|f| f.take(2048).read_to_end(&mut head));
+        if read.is_err() {
+            return false;
+        }
+        let text = String::from_utf8_lossy(&head);
+        match self {
+            Kind::JsonReport => {
+                text.trim_start().starts_with('{') && text.contains("\"schema\": \"graspmap.")
+            }
+            Kind::Video => head.starts_with(b"GIF8") || head.get(4..8) == Some(b"ftyp"),
+            Kind::ReportPage => text.contains("<title>graspmap run report</title>"),
+            Kind::Preview => false,
+        }
+    }
+}
+
+/// One file a command will write: its path, the flag that names it in errors, and what an
+/// existing file there may be.
+#[derive(Debug, Clone)]
+pub(crate) struct FileOutput {
+    pub(crate) path: PathBuf,
+    pub(crate) what: String,
+    pub(crate) existing: Existing,
+}
+
+impl FileOutput {
+    pub(crate) fn new(path: &Path, what: &str, existing: Existing) -> Self {
+        Self {
+            path: path.to_path_buf(),
+            what: what.to_owned(),
+            existing,
+        }
+    }
+}
+
+/// The files one run reads and writes, checked together before the work starts.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct RunFiles {
+    /// Files (or folders) the run reads, each with the words that name it.
+    pub(crate) inputs: Vec<(String, PathBuf)>,
+    /// Files the run writes.
+    pub(crate) outputs: Vec<FileOutput>,
+    /// Files no explicitly named output may replace (the kept eval reports).
+    pub(crate) protected: Vec<(String, PathBuf)>,
+    /// `--force`, where the command has it for its outputs (`None` where it does not).
+    pub(crate) force: Option<bool>,
+}
+
+impl RunFiles {
+    /// An input, when given.
+    pub(crate) fn input(&mut self, words: &str, path: Option<&Path>) {
+        if let Some(path) = path {
+            self.inputs.push((words.to_owned(), path.to_path_buf()));
+        }
+    }
+
+    /// An output, when given.
+    pub(crate) fn output(&mut self, path: Option<&Path>, what: &str, existing: Existing) {
+        if let Some(path) = path.filter(|p| *p != Path::new("-")) {
+            self.outputs.push(FileOutput::new(path, what, existing));
+        }
+    }
+
+    /// Every file in the kept reports' folder, `data/reports`, protected.
+    pub(crate) fn protect_kept_reports(&mut self, data: &Path) {
+        let Ok(entries) = std::fs::read_dir(data.join("reports")) else {
+            return;
+        };
+        let mut files: Vec<PathBuf> = entries
+            .flatten()
+            .map(|e| e.path())
+            .filter(|p| p.is_file())
+            .collect();
+        files.sort();
+        for path in files {
+            let words = "a report that eval keeps for graspmap report".to_owned();
+            self.protected.push((words, path));
+        }
+    }
+
+    /// Checks every output: not an input (never, even with --force), not a protected file
+    /// unless it is the command's own default path, not another output, not a folder, not an
+    /// existing file it may not replace; and writable, its missing folders created.
+    pub(crate) fn check(&self) -> Result<(), OutputError> {
+        let mut seen: Vec<(PathBuf, &FileOutput)> = Vec::new();
+        for output in &self.outputs {
+            let path = &output.path;
+            let what = &output.what;
+            let id = identity(path);
+            let protected = self
+                .protected
+                .iter()
+                .filter(|_| output.existing != Existing::Replace);
+            for (words, input) in self.inputs.iter().chain(protected) {
+                if identity(input) == id {
+                    return Err(OutputError::IsInput {
+                        what: what.clone(),
+                        path: path.clone(),
+                        input: words.clone(),
+                    });
+                }
+            }
+            if let Some((_, other)) = seen.iter().find(|(other, _)| *other == id) {
+                return Err(OutputError::SameAsOther {
+                    what: other.what.clone(),
+                    other: what.clone(),
+                    path: path.clone(),
+                });
+            }
+            seen.push((id, output));
+            if path.is_dir() {
+                return Err(OutputError::IsDirectory {
+                    what: what.clone(),
+                    path: path.clone(),
+                });
+            }
+            if path.symlink_metadata().is_ok() {
+                let forced = self.force == Some(true);
+                let (allowed, why) = match output.existing {
+                    Existing::Replace => (true, String::new()),
+                    Existing::Force => (forced, String::new()),
+                    Existing::Own(kind) => (
+                        forced || kind.holds(path),
+                        format!(" and is not an earlier {}", kind.name()),
+                    ),
+                };
+                if !allowed {
+                    return Err(OutputError::Exists {
+                        what: what.clone(),
+                        path: path.clone(),
+                        why,
+                        fix: match self.force {
+                            Some(_) => "pass --force to replace it, or choose another path",
+                            None => "delete it, or choose another path",
+                        },
+                    });
+                }
+            }
+            check_output_file(path, what)?;
+        }
+        Ok(())
+    }
+}
+
+/// A path as the file system knows it, so that `a.png`, `./a.png` and a link to it compare
+/// equal: canonical where it exists, else its folder's canonical path and its name.
+pub(crate) fn identity(path: &Path) -> PathBuf {
+    if let Ok(real) = std::fs::canonicalize(path) {
+        return real;
+    }
+    let name = path.file_name();
+    match (std::fs::canonicalize(parent_of(path)), name) {
+        (Ok(folder), Some(name)) => folder.join(name),
+        _ => std::path::absolute(path).unwrap_or_else(|_| path.to_path_buf()),
+    }
 }
 
 /// Checks that the folder `dir` exists or can be created, and can be written; `what` names it.
@@ -159,9 +376,10 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let err = check_output_file(dir.path(), "--json").unwrap_err();
         assert!(err.to_string().contains("is a directory"), "{err}");
+        // A missing folder is created.
         let missing = dir.path().join("nope").join("r.json");
-        let err = check_output_file(&missing, "--json").unwrap_err();
-        assert!(err.to_string().contains("does not exist"), "{err}");
+        check_output_file(&missing, "--json").unwrap();
+        assert!(dir.path().join("nope").is_dir());
         let file = dir.path().join("file");
         std::fs::write(&file, b"x").unwrap();
         let err = check_output_dir(&file.join("reports"), "the reports folder").unwrap_err();

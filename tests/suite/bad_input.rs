@@ -28,6 +28,8 @@ enum How {
     FirstLineOnly,
     /// While this process holds the labels' writer lock, as a running `label` would.
     LabelsLocked,
+    /// And this file of the data dir must be left byte for byte as it was.
+    Keeps(&'static str),
 }
 
 /// One row: the arguments (`{data}`, `{fresh}`, `{ro}`, `{tmp}` filled in), the exit status,
@@ -107,7 +109,43 @@ const CASES: &[Case] = &[
     )
     .without("1 epochs"),
     case("--help", 0, "Usage: graspmap"),
-    case("train --help", 0, "[default: 30]"),
+    case("train --help", 0, "[default: 30]").without("--split"),
+    // Each command's --help lists only the flags it takes.
+    case("train --help", 0, "--data <DIR>").without("--objects-dir"),
+    case("predict --help", 0, "--threads <N>").without("--split"),
+    case("report --help", 0, "--data <DIR>").without("--objects-dir"),
+    case("scene --help", 0, "--objects-dir <DIR>").without("--split"),
+    case("merge --help", 0, "--allow-partial").without("--objects-dir"),
+    case("eval --help", 0, "--split <FILE>"),
+    // The advice of a refusal is a command that works: --resume would meet the same difference.
+    case(
+        "--data {data} train --epochs 2 --batch-size 2 --lr 0.002",
+        2,
+        "--out-dir DIR",
+    )
+    .without("--resume"),
+    case(
+        "--data {data} train --trials {tmp}/trials --epochs 1 --batch-size 2",
+        2,
+        "already holds a trained model",
+    )
+    .without("--resume"),
+    case(
+        "--data {data} train --trials {tmp}/trials --epochs 1 --batch-size 2 --out-dir {tmp}/tuned",
+        0,
+        "trained 1 epoch on 4 labels and",
+    ),
+    case(
+        "--data {data} improve --rounds 1 --scenes 1 --epochs 1 --max-attempts 2 --clutter 1 --policy oracle",
+        0,
+        "the improved model is",
+    ),
+    case(
+        "--data {data} improve --rounds 1 --scenes 1 --epochs 1 --max-attempts 3 --clutter 1 --policy oracle",
+        2,
+        "give improve another --out folder",
+    )
+    .without("--force"),
     // Every global flag means something, or is refused.
     case(
         "--data {data} --split {tmp}/split_both.json train",
@@ -138,6 +176,21 @@ const CASES: &[Case] = &[
         "--split {tmp}/split_both.json bench train --no-peer",
         2,
         "--split is not used",
+    ),
+    case(
+        "--data {data} train --split {tmp}/split_both.json",
+        2,
+        "unexpected argument '--split'",
+    ),
+    case(
+        "--objects-dir {tmp}/empty scene --objects YcbPear --out {tmp}/s9.png --objects-dir {tmp}/empty",
+        2,
+        "--objects-dir is given twice",
+    ),
+    case(
+        "--data {data} label --check --split {tmp}/split_truncated.json",
+        2,
+        "split_truncated.json",
     ),
     case(
         "--data {data} --split {tmp}/split_truncated.json label --check",
@@ -185,46 +238,98 @@ const CASES: &[Case] = &[
         .how(How::Unprivileged)
         .without("denied (os error"),
     case(
-        "--data {data} --json {tmp}/missing/r.json eval --task test --policy random",
-        2,
-        "does not exist",
+        "--json {tmp}/missing_json/r.json grasp --object YcbPear --oracle",
+        0,
+        "YcbPear seed 0",
     ),
     case("--data {data} --json {tmp} train", 2, "is a directory"),
     case(
-        "scene --objects YcbPear --out {tmp}/missing/s.png",
-        2,
-        "does not exist",
+        "scene --objects YcbPear --out {tmp}/missing_scene/s.png",
+        0,
+        "wrote",
     ),
     case("scene --objects YcbPear --out {tmp}", 2, "is a directory"),
     case(
-        "scene --objects YcbPear --out {tmp}/s.png --depth {tmp}/missing/d.png",
-        2,
-        "--depth",
+        "scene --objects YcbPear --out {tmp}/s8.png --depth {tmp}/missing_depth/d.png",
+        0,
+        "wrote",
     ),
     case(
-        "grasp --object YcbPear --oracle --record {tmp}/missing/g.mp4",
-        2,
-        "does not exist",
+        "grasp --object YcbPear --oracle --image {tmp}/missing_grasp/g.png",
+        0,
+        "YcbPear seed 0",
     ),
     case(
-        "grasp --object YcbPear --oracle --image {tmp}/missing/g.png",
-        2,
-        "--image",
+        "--data {data} predict --image {tmp}/photo.png --out {tmp}/missing_predict/p.png",
+        0,
+        "wrote",
     ),
     case(
-        "--data {data} predict --image {tmp}/photo.png --out {tmp}/missing/p.png",
-        2,
-        "does not exist",
+        "--data {data} report --out {tmp}/missing_report/new/r.html",
+        0,
+        "wrote",
     ),
     case(
-        "--data {data} report --out {tmp}/missing/r.html",
+        "--data {data} eval --task empty_bin --policy random --max-attempts 1 --record {tmp}/missing_eval/e.mp4",
+        0,
+        "wrote the episode video",
+    ),
+    // No output replaces an input (even with --force), another output, a kept report, or an
+    // existing file that is not an earlier output of its kind (without --force).
+    case(
+        "merge --out {tmp}/shard_a.json {tmp}/shard_a.json {tmp}/shard_b.json --force",
         2,
-        "does not exist",
+        "is also the input",
     ),
     case(
-        "--data {data} eval --task test --policy random --record {tmp}/missing/e.mp4",
+        "merge --out {tmp}/taken.json {tmp}/shard_a.json {tmp}/shard_b.json",
         2,
-        "--record",
+        "already exists; pass --force",
+    ),
+    case(
+        "merge --out {tmp}/m2.json --json {tmp}/m2.json {tmp}/shard_a.json {tmp}/shard_b.json",
+        2,
+        "both name",
+    ),
+    case(
+        "merge --force --out {tmp}/merged_store {tmp}/empty",
+        2,
+        "leave --force out",
+    ),
+    case(
+        "--data {data} predict --image {tmp}/photo.png --out {tmp}/photo.png --force",
+        2,
+        "is also the --image",
+    ),
+    case(
+        "--data {data} predict --image {tmp}/photo.png --out {tmp}/taken.png",
+        2,
+        "already exists; pass --force",
+    ),
+    case(
+        "scene --objects YcbPear --out {tmp}/taken.png",
+        2,
+        "already exists",
+    ),
+    case(
+        "grasp --object YcbPear --oracle --image {tmp}/taken.png",
+        2,
+        "already exists",
+    ),
+    case(
+        "--data {data} report --out {tmp}/mine.html",
+        2,
+        "is not an earlier graspmap report page",
+    ),
+    case(
+        "--data {data} --json {tmp}/notes.txt report",
+        2,
+        "is not an earlier graspmap report",
+    ),
+    case(
+        "--data {fresh} label --clicks {tmp}/clicks_test.json --json {tmp}/clicks_test.json",
+        2,
+        "is also the --clicks file",
     ),
     case("--data {ro} report --out {ro}/r.html", 2, "cannot write").how(How::Unprivileged),
     // Finite numbers only, within their documented range.
@@ -284,6 +389,8 @@ const CASES: &[Case] = &[
     // label --check checks everything label reads.
     case("--data {bad_progress} label --check", 2, "progress.json"),
     case("--data {short_progress} label --check", 2, "records"),
+    case("--data {png_cut} label --check", 2, "truncated"),
+    case("--data {png16} label --check", 2, "Rgb16"),
     // Long runs say how long, and an interrupted sweep keeps its scenes.
     case(
         "--data {data} eval --task empty_bin --policy random --seeds 1-100000 --max-attempts 1",
@@ -292,9 +399,101 @@ const CASES: &[Case] = &[
     )
     .how(How::InterruptAfter(4)),
     case(
-        "--data {data} eval --task empty_bin --policy random --seeds 1-2 --max-attempts 1 --resume",
+        "--data {data} eval --task empty_bin --policy random --seeds 1-100000 --max-attempts 1 --resume",
+        130,
+        "scenes already in",
+    )
+    .how(How::InterruptAfter(4)),
+    // A smaller or different run keeps its report beside the larger one's, never over it.
+    case(
+        "--data {data} eval --task empty_bin --policy random",
         0,
-        "already in",
+        "report kept in",
+    ),
+    case(
+        "--data {data} eval --task empty_bin --policy random --max-attempts 1",
+        0,
+        "beside, never over",
+    )
+    .how(How::Keeps("reports/eval_empty_bin_random.json")),
+    case(
+        "--data {data} eval --task empty_bin --policy random --seeds 2,3 --max-attempts 2",
+        0,
+        "beside, never over",
+    )
+    .how(How::Keeps("reports/eval_empty_bin_random.json")),
+    case(
+        "--data {data} --json {data}/reports/eval_empty_bin_random.json train --epochs 1",
+        2,
+        "a report that eval keeps",
+    )
+    .how(How::Keeps("reports/eval_empty_bin_random.json")),
+    // Every flag applies, or is refused naming it.
+    case("grasp --object YcbPear --oracle --angle 30", 2, "--angle"),
+    case("grasp --object YcbPear --random --angle 30", 2, "--angle"),
+    case("--data {data} train --trial-weight 0.5", 2, "--trial-weight"),
+    case("--data {data} train --trial-sigma 2", 2, "--trial-sigma"),
+    case(
+        "--data {data} train --trials {tmp}/trials --trials {tmp}/trials",
+        2,
+        "given twice",
+    ),
+    case(
+        "--data {data} eval --task train --give-up-after 3",
+        2,
+        "--give-up-after applies to --task empty_bin only",
+    ),
+    case(
+        "--data {data} eval --task test --max-attempts 3",
+        2,
+        "--max-attempts applies to --task empty_bin only",
+    ),
+    case(
+        "--data {data} eval --task train --n-past-action 8",
+        2,
+        "--n-past-action",
+    ),
+    case(
+        "--data {data} eval --task train --policy random --verify-top 10 --checkpoint /nonexistent",
+        2,
+        "applies to --policy model only",
+    ),
+    case(
+        "--data {data} eval --task empty_bin --policy oracle --suppression-sigma 3",
+        2,
+        "--suppression-sigma",
+    ),
+    case(
+        "--data {data} eval --task empty_bin --policy random --n-past-action 8",
+        2,
+        "--n-past-action applies to --policy model and oracle only",
+    ),
+    case(
+        "--data {data} collect --policy oracle --explore 0.9",
+        2,
+        "--explore applies to --policy model and mix only",
+    ),
+    case(
+        "--data {data} collect --policy model --oracle-share 0.2",
+        2,
+        "--oracle-share",
+    ),
+    case(
+        "--data {data} improve --policy random --n-past-action 4",
+        2,
+        "--n-past-action",
+    ),
+    case("--data {data} collect --check --scenes 3", 2, "--scenes"),
+    case(
+        "--data {fresh} label --web --click-noise-px 1",
+        2,
+        "--click-noise-px",
+    ),
+    case("--data {data} label --check --per-object 3", 2, "--per-object"),
+    case(
+        "--data {data} label --delete YcbHammer:1 --seed 3",
+        2,
+        "--seed",
     ),
     // The smaller slips.
     case("--data {data} train --epochs -1", 2, "--epochs"),
@@ -532,6 +731,13 @@ impl Workspace {
             r#"[{"object": "YcbBanana", "x": 64, "y": 64, "angle": 0}]"#,
         );
         write("corrupt.safetensors", "not a checkpoint");
+        // Files that outputs must not replace: existing ones that graspmap did not write, and
+        // two "shards" (only their names matter: the outputs are checked first).
+        write("taken.json", "{}");
+        write("notes.txt", "my notes");
+        write("mine.html", "<p>my page</p>");
+        write("shard_a.json", "{}");
+        write("shard_b.json", "{}");
         std::fs::create_dir_all(ws.path("empty")).unwrap();
         image::GrayImage::from_pixel(128, 128, image::Luma([90]))
             .save(ws.path("grey.png"))
@@ -542,6 +748,25 @@ impl Workspace {
         image::RgbImage::from_pixel(128, 128, image::Rgb([90, 20, 20]))
             .save(ws.path("photo.png"))
             .unwrap();
+        std::fs::copy(ws.path("photo.png"), ws.path("taken.png")).unwrap();
+        // A small trial store.
+        assert_ok(&graspmap(&[
+            "--data",
+            data_text,
+            "--threads",
+            "2",
+            "collect",
+            "--scenes",
+            "1",
+            "--policy",
+            "oracle",
+            "--max-attempts",
+            "2",
+            "--clutter",
+            "1",
+            "--out",
+            ws.path("trials").to_str().unwrap(),
+        ]));
         // A read-only data dir holding labels and a model.
         let ro = ws.path("ro");
         copy_tree(&data, &ro);
@@ -552,6 +777,24 @@ impl Workspace {
         let last = truncated.join("affordance/last.safetensors");
         let bytes = std::fs::read(&last).unwrap();
         std::fs::write(&last, &bytes[..bytes.len() / 3]).unwrap();
+        // A label image cut short, and one in 16-bit RGB: both decode to no training image.
+        for (name, damage) in [("png_cut", 0), ("png16", 1)] {
+            let dir = ws.path(name);
+            copy_labels(&dir);
+            let image = dir.join("labels/YcbHammer_1_rgb.png");
+            if damage == 0 {
+                let bytes = std::fs::read(&image).unwrap();
+                std::fs::write(&image, &bytes[..bytes.len() * 2 / 3]).unwrap();
+            } else {
+                image::ImageBuffer::<image::Rgb<u16>, _>::from_pixel(
+                    128,
+                    128,
+                    image::Rgb([9000, 300, 300]),
+                )
+                .save(&image)
+                .unwrap();
+            }
+        }
         // progress.json that does not parse, and one whose counts disagree with the labels.
         for (name, text) in [
             (
@@ -584,7 +827,15 @@ impl Workspace {
         row.split_whitespace()
             .map(|word| {
                 let mut word = word.replace("{tmp}", self.tmp.path().to_str().unwrap());
-                for name in ["data", "ro", "truncated", "bad_progress", "short_progress"] {
+                for name in [
+                    "data",
+                    "ro",
+                    "truncated",
+                    "bad_progress",
+                    "short_progress",
+                    "png_cut",
+                    "png16",
+                ] {
                     word = word.replace(&format!("{{{name}}}"), self.path(name).to_str().unwrap());
                 }
                 if word.contains("{fresh}") {
@@ -648,7 +899,7 @@ fn run(ws: &Workspace, case: &Case) -> Output {
     let args = ws.args(case.args);
     let mut command = command(&args, case.how);
     match case.how {
-        How::Plain | How::Unprivileged => command.output().unwrap(),
+        How::Plain | How::Unprivileged | How::Keeps(_) => command.output().unwrap(),
         How::LabelsLocked => {
             let _held =
                 graspmap::data::lock::StoreLock::acquire(&ws.path("data").join("labels"), "label")
@@ -699,6 +950,10 @@ fn every_bad_input_gets_one_line_that_names_it_and_the_status_it_should() {
     let ws = Workspace::new();
     let mut failures = Vec::new();
     for case in CASES {
+        let kept = match case.how {
+            How::Keeps(file) => Some((file, std::fs::read(ws.path("data").join(file)).ok())),
+            _ => None,
+        };
         let out = run(&ws, case);
         let stdout = String::from_utf8_lossy(&out.stdout);
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -716,6 +971,12 @@ fn every_bad_input_gets_one_line_that_names_it_and_the_status_it_should() {
         }
         if both.contains("panicked") {
             wrong.push("panicked".into());
+        }
+        if let Some((file, before)) = kept {
+            let after = std::fs::read(ws.path("data").join(file)).ok();
+            if before.is_none() || after != before {
+                wrong.push(format!("{file} was not kept as it was"));
+            }
         }
         if case.code == 2 && stderr.trim_end().lines().count() != 1 {
             wrong.push("the error is not one line".into());

@@ -27,6 +27,16 @@ pub fn build_commit() -> String {
         .unwrap_or_else(|| "unknown".to_owned())
 }
 
+/// The report an `eval` kept under DATA/reports, as its "report kept in PATH" line names it.
+pub fn kept_report(output: &Output) -> std::path::PathBuf {
+    let stdout = String::from_utf8_lossy(&output.stdout);
+    let line = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("report kept in "))
+        .unwrap_or_else(|| panic!("no kept report named in: {stdout}"));
+    std::path::PathBuf::from(line.split(" (").next().unwrap())
+}
+
 /// Asserts success, showing stderr when it fails.
 pub fn assert_ok(output: &Output) {
     assert!(

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use crate::common::{assert_ok, assert_user_error};
+use crate::common::{assert_ok, assert_user_error, kept_report};
 use crate::eval::{read_json, Setup};
 
 /// Every `href="…"` and `src="…"` value of the page.
@@ -40,8 +40,8 @@ fn target(page_dir: &Path, url: &str) -> std::path::PathBuf {
 }
 
 /// Labels (the reference fixture), one epoch of training, the model and the random baseline on
-/// the train task, and one recorded oracle attempt of empty_bin.
-fn small_run() -> Setup {
+/// the train task, and one recorded oracle attempt of empty_bin; with the reports they kept.
+fn small_run() -> (Setup, Vec<std::path::PathBuf>) {
     let setup = Setup::new();
     let labels = setup.path("labels");
     std::fs::create_dir_all(&labels).unwrap();
@@ -50,6 +50,7 @@ fn small_run() -> Setup {
         std::fs::copy(entry.path(), labels.join(entry.file_name())).unwrap();
     }
     let video = setup.path("episode.mp4");
+    let mut kept = Vec::new();
     for args in [
         &[
             "train",
@@ -65,17 +66,36 @@ fn small_run() -> Setup {
         &["eval", "--task", "train"][..],
         &["eval", "--task", "train", "--policy", "random"][..],
     ] {
-        assert_ok(&setup.run(args));
+        let out = setup.run(args);
+        assert_ok(&out);
+        if args[0] == "eval" {
+            kept.push(kept_report(&out));
+        }
     }
-    assert_ok(&setup.oracle_empty_bin(1, &["--record", video.to_str().unwrap()]));
-    setup
+    let out = setup.oracle_empty_bin(1, &["--record", video.to_str().unwrap()]);
+    assert_ok(&out);
+    kept.push(kept_report(&out));
+    (setup, kept)
+}
+
+/// The file name of a path.
+fn name_of(path: &Path) -> String {
+    path.file_name().unwrap().to_string_lossy().into_owned()
 }
 
 #[test]
 fn the_report_of_a_small_run_links_only_files_it_wrote_and_names_every_eval() {
-    let setup = small_run();
-    // eval keeps its reports under DATA/reports even without --json.
-    let kept = read_json(&setup.path("reports/eval_train_model.json"));
+    let (setup, kept_paths) = small_run();
+    // eval keeps its reports under DATA/reports even without --json: one per task, policy and
+    // settings (this set-up's own split makes them other settings than the defaults).
+    assert!(
+        kept_paths
+            .iter()
+            .all(|p| p.starts_with(setup.path("reports")) && p.is_file()),
+        "{kept_paths:?}"
+    );
+    let kept = read_json(&kept_paths[0]);
+    assert!(name_of(&kept_paths[0]).starts_with("eval_train_model_"));
     assert_eq!(kept["schema"], "graspmap.eval/2");
     assert!(kept["results"]["vis_dir"]
         .as_str()
@@ -108,12 +128,9 @@ fn the_report_of_a_small_run_links_only_files_it_wrote_and_names_every_eval() {
         assert!(url.starts_with("report_files/"), "{url}");
         assert!(target(setup.dir.path(), url).is_file(), "broken link {url}");
     }
-    for name in [
-        "eval_train_model.json",
-        "eval_train_random.json",
-        "eval_empty_bin_oracle.json",
-    ] {
-        assert!(html.contains(name), "{name} not named");
+    for path in &kept_paths {
+        let name = name_of(path);
+        assert!(html.contains(&name), "{name} not named");
     }
     assert!(html.contains("<video controls") && html.contains("episode.mp4"));
     assert!(html.contains("4 labels of 2 objects"), "label summary");
@@ -141,6 +158,25 @@ fn the_report_of_a_small_run_links_only_files_it_wrote_and_names_every_eval() {
         &setup.run(&["report", "--out", "report.txt"]),
         &["report.txt", ".html"],
     );
+    // A probe with other settings keeps its own report, and the page lists it apart from the
+    // runs it cannot be compared with, naming its settings.
+    let before = std::fs::read(&kept_paths[1]).unwrap();
+    let out = setup.run(&[
+        "eval", "--task", "train", "--policy", "random", "--seeds", "7",
+    ]);
+    assert_ok(&out);
+    let probe = kept_report(&out);
+    assert_ne!(probe, kept_paths[1]);
+    assert_eq!(std::fs::read(&kept_paths[1]).unwrap(), before, "replaced");
+    assert_ok(&setup.run(&["report"]));
+    let html = std::fs::read_to_string(&page).unwrap();
+    assert!(html.contains(&name_of(&probe)) && html.contains(&name_of(&kept_paths[1])));
+    assert!(
+        html.contains("Runs with seed 7,"),
+        "the probe's settings are named"
+    );
+    assert!(html.contains("listed apart, not compared"));
+    assert!(html.contains("graspmap eval --task train --policy model --seeds 7"));
     let dir = setup.path("pages.html");
     std::fs::create_dir_all(&dir).unwrap();
     assert_user_error(

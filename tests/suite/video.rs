@@ -54,9 +54,13 @@ fn an_mp4_episode_is_h264_with_every_frame_of_the_gif_and_repeats_byte_for_byte(
         setup.path("again.mp4"),
         setup.path("episode.gif"),
     );
+    let mut recorded = None;
     for video in [&mp4, &gif, &again] {
-        assert_ok(&setup.oracle_empty_bin(1, &["--record", video.to_str().unwrap()]));
+        let out = setup.oracle_empty_bin(1, &["--record", video.to_str().unwrap()]);
+        assert_ok(&out);
+        recorded = Some(out);
     }
+    let recorded = recorded.unwrap();
     let (codec, frames, duration) = probe(&mp4);
     assert_eq!(codec, "h264");
     let expected = gif_frames(&gif) as u64;
@@ -75,7 +79,7 @@ fn an_mp4_episode_is_h264_with_every_frame_of_the_gif_and_repeats_byte_for_byte(
     );
     assert!(bytes.len() < std::fs::metadata(&gif).unwrap().len() as usize / 4);
     // The kept report says where the video went.
-    let kept = crate::eval::read_json(&setup.path("reports/eval_empty_bin_oracle.json"));
+    let kept = crate::eval::read_json(&crate::common::kept_report(&recorded));
     assert_eq!(kept["results"]["video"], again.to_str().unwrap());
 }
 

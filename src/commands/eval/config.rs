@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 
+use crate::commands::RunBy;
 use crate::data::trials::Shard;
 use crate::model::unet::Precision;
 use crate::policy::model::ModelPolicyConfig;
@@ -56,6 +57,8 @@ pub(crate) struct EvalConfig {
     /// The part of `seeds` this run evaluates: seed number i (0-based, in the order given)
     /// belongs to shard i mod N + 1.
     pub(crate) shard: Shard,
+    /// Who runs it, for the advice of its errors.
+    pub(crate) run_by: RunBy,
 }
 
 impl EvalConfig {

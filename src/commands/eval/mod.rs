@@ -40,7 +40,8 @@ pub(crate) use config::{
     SINGLE_OBJECT_SEED_OFFSET,
 };
 use sweep::{
-    announce_plan, finished_runs, keep_interrupted, kept_path, resolved_config, resume_source,
+    announce_plan, comparable, finished_runs, keep_interrupted, kept_path, resolved_config,
+    resume_source,
 };
 
 /// Settings shared by every scene of one evaluation, and by the threads that run them.
@@ -107,7 +108,7 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         Task::Test => "eval_pick_testing_vis",
         Task::EmptyBin => "eval_empty_bin_vis",
     });
-    let kept = kept_path(&context.data, &config);
+    let kept = kept_path(context, &config, &names);
     check_output_dir(kept.parent().unwrap_or(&context.data), "the reports folder")?;
     check_output_dir(&vis_dir, "the visualisations folder")?;
     if let Some(record) = &config.record {
@@ -264,12 +265,20 @@ fn finish(
     let resolved = resolved_config(context, config, names);
     // The latest finished run of each task and policy stays under DATA, beside the model, for
     // `graspmap report`; --json is the user's own copy, wherever it goes.
-    let kept = kept_path(&context.data, config);
+    let kept = kept_path(context, config, names);
     let targets = context.json.iter().chain(std::iter::once(&kept));
     for target in targets {
         write_versioned_report(target, "eval", 2, config.seeds[0], &resolved, &results)?;
     }
-    context.say(&format!("report kept in {}", kept.display()));
+    let settings = comparable(context, config, names);
+    match settings.is_default() {
+        true => context.say(&format!("report kept in {}", kept.display())),
+        false => context.say(&format!(
+            "report kept in {} ({}; beside, never over, the reports of other settings)",
+            kept.display(),
+            settings.describe()
+        )),
+    }
     Ok(())
 }
 

@@ -6,34 +6,36 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context as _};
 
 use super::config::{EvalConfig, ATTEMPTS_PER_OBJECT};
-use crate::commands::Context;
+use crate::commands::{Context, RunBy};
 use crate::interrupt;
 use crate::named::{counted, Named};
 use crate::policy::PolicyKind;
 use crate::present::envelope::write_versioned_report;
 use crate::present::eval_report::{summarise, SceneRun, Task};
+use crate::present::kept_reports::Comparable;
 use crate::sim::WorkcellConfig;
 
-/// Where `eval` keeps its latest report of `task` and `policy`: `DATA/reports/eval_<task>_<policy>.json`.
-pub(crate) fn kept_report_path(data: &Path, task: Task, policy: PolicyKind) -> PathBuf {
-    data.join("reports")
-        .join(format!("eval_{}_{}.json", task.name(), policy.name()))
+/// The settings that decide which runs this one can be compared with, and where its report is
+/// kept (present::kept_reports).
+pub(crate) fn comparable(context: &Context, config: &EvalConfig, names: &[String]) -> Comparable {
+    Comparable::new(
+        config.task,
+        &config.seeds,
+        config.max_attempts,
+        config.give_up_after,
+        &context.objects.location(),
+        &context.split.location(),
+        names,
+        (!config.shard.is_whole()).then(|| config.shard.to_string()),
+    )
 }
 
-/// Where this run keeps its report: [`kept_report_path`], or for a shard, beside it with
-/// `_shard<I>of<N>` before `.json`, so shards sharing a data folder keep one each.
-pub(super) fn kept_path(data: &Path, config: &EvalConfig) -> PathBuf {
-    let whole = kept_report_path(data, config.task, config.policy);
-    if config.shard.is_whole() {
-        return whole;
-    }
-    whole.with_file_name(format!(
-        "eval_{}_{}_shard{}of{}.json",
-        config.task.name(),
-        config.policy.name(),
-        config.shard.index,
-        config.shard.count
-    ))
+/// Where this run keeps its report: `DATA/reports/eval_<task>_<policy>.json` for the default
+/// settings, with a short key of the seeds, attempts and objects before `.json` for any others,
+/// so that a smaller or different run never replaces another's report; and for a shard,
+/// `_shard<I>of<N>`, so shards sharing a data folder keep one each.
+pub(super) fn kept_path(context: &Context, config: &EvalConfig, names: &[String]) -> PathBuf {
+    comparable(context, config, names).kept_path(&context.data, config.policy)
 }
 
 /// Writes the report of an interrupted sweep (the scenes finished so far) and says how to
@@ -61,15 +63,19 @@ pub(super) fn keep_interrupted(
         // The finished scenes always stay under DATA/reports, where `--resume` finds them, and
         // in the user's own --json copy when there is one.
         let resolved = resolved_config(context, config, names);
-        let kept_path = kept_path(&context.data, config);
+        let kept_path = kept_path(context, config, names);
         let own = context.json.as_ref().filter(|j| *j != Path::new("-"));
         for target in own.into_iter().chain(std::iter::once(&kept_path)) {
             write_versioned_report(target, "eval", 2, config.seeds[0], &resolved, &results)?;
         }
         let place = own.unwrap_or(&kept_path);
         context.say(&format!(
-            "{interrupted}: {kept} kept in {}; rerun the same command with --resume to finish the rest",
-            place.display()
+            "{interrupted}: {kept} kept in {}; {}",
+            place.display(),
+            match config.run_by {
+                RunBy::Own => "rerun the same command with --resume to finish the rest",
+                RunBy::Improve => "rerun the same improve command (its evaluation starts again)",
+            }
         ));
         Ok(())
     })();

@@ -9,7 +9,7 @@ use tch::nn;
 
 mod epoch_files;
 
-use super::Context;
+use super::{Context, RunBy};
 use crate::data::augment::AugmentConfig;
 use crate::data::dataset::{load_dataset, split_train_validation, LabelledImage, Supervision};
 use crate::data::labels::LabelStore;
@@ -45,6 +45,8 @@ pub(crate) struct TrainOptions {
     pub(crate) trials: Vec<PathBuf>,
     /// A checkpoint whose weights the run starts from, instead of fresh ones.
     pub(crate) start_from: Option<PathBuf>,
+    /// Who runs it, for the advice of its errors.
+    pub(crate) run_by: RunBy,
 }
 
 #[derive(Debug, serde::Serialize)]
@@ -108,10 +110,14 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
             bar.finish_and_clear();
             let interrupted = interrupt::requested().unwrap_or(Interrupted { signal: 2 });
             context.say(&format!(
-                "{interrupted}: epoch {} was abandoned; {} holds epoch {} complete; rerun with --resume to continue exactly",
+                "{interrupted}: epoch {} was abandoned; {} holds epoch {} complete; {}",
                 run.meta.epoch + 1,
                 out_dir.join("last.safetensors").display(),
-                run.meta.epoch
+                run.meta.epoch,
+                match options.run_by {
+                    RunBy::Own => "rerun with --resume to continue exactly",
+                    RunBy::Improve => "rerun the same improve command to continue exactly",
+                }
             ));
             return Err(interrupted.into());
         };
@@ -299,8 +305,14 @@ fn resume_or_refuse(
         },
         Err(e) => format!("has no readable training state ({e:#})"),
     };
+    // --resume would meet the same difference: the ways forward are a new run here, or
+    // another folder.
+    let fix = match options.run_by {
+        RunBy::Own => "pass --force to train anew (the old best is kept as best.prev.safetensors), or --out-dir DIR to train into another folder",
+        RunBy::Improve => "rerun improve with the flags that made it, or give improve another --out folder",
+    };
     bail!(
-        "{} already holds a trained model, and {} {why}; pass --resume to continue it, or --force to train anew (the old best is kept as best.prev.safetensors)",
+        "{} already holds a trained model, and {} {why}; {fix}",
         best.display(),
         last.display()
     )

@@ -1,5 +1,8 @@
-//! The report's evaluation section: every report `eval` kept under DATA/reports, grouped by task,
-//! the model beside its baselines, then each report's table, visualisations and video.
+//! The report's evaluation section: every report `eval` kept under DATA/reports, grouped by task
+//! and then by the settings that make runs comparable (seeds, attempts, objects:
+//! present::kept_reports), the model beside the baselines run with the same settings, then each
+//! report's table, visualisations and video. Runs with other settings are never put side by side:
+//! each group names its settings.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -10,10 +13,12 @@ use serde::Deserialize;
 
 use super::files::Files;
 use super::html::{esc, missing};
+use crate::assets::BUNDLED_PREFIX;
 use crate::metrics::{FailureTally, Spread};
 use crate::named::Named;
 use crate::policy::PolicyKind;
 use crate::present::eval_report::{AttemptRecord, EvalResults, ObjectSummary, SceneRun, Task};
+use crate::present::kept_reports::{Comparable, DEFAULT_MAX_ATTEMPTS};
 
 /// Per-attempt visualisations shown per report; the rest stay in their folder.
 const VIS_SHOWN: usize = 6;
@@ -29,17 +34,41 @@ struct Kept {
     results: EvalResults,
 }
 
-/// Where the evaluation ran and what it recorded, from the report's resolved config.
+/// Where the evaluation ran, what it recorded, and the settings that decide what it can be
+/// compared with, from the report's resolved config.
 #[derive(Debug, Deserialize)]
 struct RunSettings {
     global: RunGlobal,
     #[serde(default)]
     record: Option<PathBuf>,
+    /// The whole sweep's seeds (older reports: the results' seeds).
+    #[serde(default)]
+    seeds: Option<Vec<u64>>,
+    #[serde(default)]
+    max_attempts: Option<u32>,
+    #[serde(default)]
+    give_up_after: Option<u32>,
+    #[serde(default)]
+    objects: Vec<String>,
+    #[serde(default)]
+    shard: Option<String>,
 }
 
 #[derive(Debug, Deserialize)]
 struct RunGlobal {
     data: PathBuf,
+    #[serde(default = "bundled_objects")]
+    objects_dir: PathBuf,
+    #[serde(default = "bundled_split")]
+    split_path: PathBuf,
+}
+
+fn bundled_objects() -> PathBuf {
+    PathBuf::from(format!("{BUNDLED_PREFIX}objects"))
+}
+
+fn bundled_split() -> PathBuf {
+    PathBuf::from(format!("{BUNDLED_PREFIX}objects/split.json"))
 }
 
 /// One kept report, read and checked.
@@ -48,6 +77,7 @@ struct Entry {
     file_name: String,
     task: Task,
     policy: PolicyKind,
+    settings: Comparable,
     report: Kept,
 }
 
@@ -90,6 +120,17 @@ fn read_one(path: &Path) -> anyhow::Result<Entry> {
         );
     }
     let (task, policy) = (report.results.task, report.results.policy);
+    let config = &report.config;
+    let settings = Comparable::new(
+        task,
+        config.seeds.as_deref().unwrap_or(&report.results.seeds),
+        config.max_attempts.unwrap_or(DEFAULT_MAX_ATTEMPTS),
+        config.give_up_after.unwrap_or(0),
+        &config.global.objects_dir,
+        &config.global.split_path,
+        &config.objects,
+        config.shard.clone(),
+    );
     Ok(Entry {
         path: path.to_path_buf(),
         file_name: path
@@ -97,6 +138,7 @@ fn read_one(path: &Path) -> anyhow::Result<Entry> {
             .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
         task,
         policy,
+        settings,
         report,
     })
 }
@@ -131,11 +173,42 @@ pub(crate) fn evals_section(data_dir: &Path, files: &mut Files) -> anyhow::Resul
             ));
             continue;
         }
-        mine.sort_by_key(|e| PolicyKind::ALL.iter().position(|&p| p == e.policy));
         let _ = writeln!(html, "<h3>Task {}</h3>", esc(task.name()));
-        html.push_str(&comparison(task, &mine, files)?);
+        // One group per set of comparable settings: the defaults first, then in name order.
+        mine.sort_by(|a, b| {
+            (!a.settings.is_default(), &a.settings, a.file_name.as_str()).cmp(&(
+                !b.settings.is_default(),
+                &b.settings,
+                b.file_name.as_str(),
+            ))
+        });
+        let mut groups: Vec<Vec<&Entry>> = Vec::new();
         for entry in mine {
-            html.push_str(&details(entry, data_dir, files)?);
+            match groups.last_mut() {
+                Some(group) if group[0].settings == entry.settings => group.push(entry),
+                _ => groups.push(vec![entry]),
+            }
+        }
+        let several = groups.len() > 1;
+        for mut group in groups {
+            group.sort_by_key(|e| PolicyKind::ALL.iter().position(|&p| p == e.policy));
+            let settings = &group[0].settings;
+            if several || !settings.is_default() {
+                let _ = writeln!(
+                    html,
+                    "<p class=\"note\">Runs with {}{}:</p>",
+                    esc(&settings.describe()),
+                    if several {
+                        " (runs with other settings are listed apart, not compared)"
+                    } else {
+                        ""
+                    }
+                );
+            }
+            html.push_str(&comparison(task, &group, files)?);
+            for entry in group {
+                html.push_str(&details(entry, data_dir, files)?);
+            }
         }
     }
     Ok(html)
@@ -202,10 +275,19 @@ fn comparison(task: Task, entries: &[&Entry], files: &mut Files) -> anyhow::Resu
         .filter(|p| !entries.iter().any(|e| e.policy == **p))
         .map(|p| p.name())
         .collect();
-    for policy in absent {
+    let settings = &entries[0].settings;
+    let (with, flags) = match settings.is_default() {
+        true => ("", String::new()),
+        false => (" with these settings", settings.eval_flags()),
+    };
+    // A shard's missing baselines are runs of the whole sweep; the shard is one part of it.
+    for policy in absent.into_iter().filter(|_| settings.shard.is_none()) {
         html.push_str(&missing(
-            &format!("No {policy} run of {} yet", task.name()),
-            &format!("graspmap eval --task {} --policy {policy}", task.name()),
+            &format!("No {policy} run of {}{with} yet", task.name()),
+            &format!(
+                "graspmap eval --task {} --policy {policy}{flags}",
+                task.name()
+            ),
         ));
     }
     Ok(html)
@@ -225,7 +307,16 @@ fn details(entry: &Entry, data_dir: &Path, files: &mut Files) -> anyhow::Result<
         object_table(&r.per_object)
     });
     let run_data = &entry.report.config.global.data;
-    let dir = format!("{}_{}", entry.task.name(), entry.policy.name());
+    // One folder per kept report (`eval_train_model.json` → `train_model/`), so that runs of
+    // one task and policy with other settings keep their own pictures.
+    let dir = entry
+        .file_name
+        .strip_prefix("eval_")
+        .and_then(|n| n.strip_suffix(".json"))
+        .map_or_else(
+            || format!("{}_{}", entry.task.name(), entry.policy.name()),
+            str::to_owned,
+        );
     let drawn: Vec<(&SceneRun, &AttemptRecord, &PathBuf)> = r
         .runs
         .iter()
@@ -302,17 +393,21 @@ fn video(entry: &Entry, data_dir: &Path, dir: &str, files: &mut Files) -> anyhow
         .as_ref()
         .or(entry.report.config.record.as_ref());
     let Some(recorded) = recorded else {
-        return Ok(if entry.task == Task::EmptyBin {
-            missing(
-                "No episode video of this run",
-                &format!(
-                    "graspmap eval --task empty_bin --policy {} --record episode.mp4",
-                    entry.policy.name()
-                ),
-            )
-        } else {
-            String::new()
-        });
+        // A sweep of several seeds has no episode video: --record films one scene.
+        return Ok(
+            if entry.task == Task::EmptyBin && entry.settings.seeds.len() == 1 {
+                missing(
+                    "No episode video of this run",
+                    &format!(
+                        "graspmap eval --task empty_bin --policy {}{} --record episode.mp4",
+                        entry.policy.name(),
+                        entry.settings.eval_flags()
+                    ),
+                )
+            } else {
+                String::new()
+            },
+        );
     };
     let Some(found) = locate(recorded, &entry.report.config.global.data, data_dir) else {
         return Ok(format!(
