@@ -25,13 +25,14 @@ self=$(realpath "$0")
 cd "$(dirname "$self")/.."
 root=$(pwd)
 
-tables=(objects pipeline training crop trials slurm pytorch latency workcell quality yardstick sweep placing collision
+tables=(objects pipeline threads training crop trials slurm pytorch latency workcell quality yardstick sweep placing collision
   verification centring suppression variants labelling soak faults tests webpage video)
 
 describe() {
   case $1 in
     objects) echo "the oracle on train and test, seeds 1-3, on the bundled objects and on assets/ycb-meshes" ;;
     pipeline) echo "./demo.sh's steps timed one by one, against the Python reference" ;;
+    threads) echo "an empty_bin sweep in one process with --threads 2 against two 1-thread shard processes at once" ;;
     training) echo "train --epochs 30 in fp32 and bf16: wall, seconds per epoch, images/s, best loss" ;;
     crop) echo "train --crop 64 against --crop 0 on the labels: wall, loss, train, test and empty_bin" ;;
     trials) echo "improve (collect + retrain rounds) from the labelled model, every round evaluated, vetoes on and off" ;;
@@ -401,6 +402,33 @@ t_objects() {
       eval_into "$d/$set-$task.json" "$d/data-$set" --policy oracle --task "$task" --seeds "$OBJECT_SEEDS" "${dir[@]}"
     done
   done
+}
+
+t_threads() {
+  local d=$out/threads
+  rm -rf "$d"
+  mkdir -p "$d"
+  ensure_model
+  local sweep=(eval --task empty_bin --seeds "$EMPTY_SEEDS" --n-past-action 8 --max-attempts "$MAX_ATTEMPTS")
+  cp -r "$model_dir" "$d/one"
+  log "threads: ${sweep[*]} with --threads 2 in one process"
+  timed "$d/one.time.json" "$bin" --data "$d/one" --quiet --threads 2 --json "$d/one.json" "${sweep[@]}" >"$d/one.log" 2>&1
+  log "threads: the same sweep as two 1-thread shard processes at once"
+  cp -r "$model_dir" "$d/two"
+  python3 - "$d" "$bin" "${sweep[@]}" <<'PY'
+import json, subprocess, sys, time
+d, binary, sweep = sys.argv[1], sys.argv[2], sys.argv[3:]
+start = time.monotonic()
+procs = [subprocess.Popen([binary, "--data", f"{d}/two", "--quiet", "--threads", "1", "--json",
+                           f"{d}/shard_{i}.json", *sweep, "--shard", f"{i}/2"],
+                          stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) for i in (1, 2)]
+ends = []
+for p in procs:
+    if p.wait() != 0:
+        sys.exit(f"threads: a shard failed with status {p.returncode}")
+    ends.append(time.monotonic() - start)
+json.dump({"wall_s": max(ends), "shard_walls": ends}, open(f"{d}/two.time.json", "w"))
+PY
 }
 
 # Labels for the training table: the model's when it was labelled in this run, else label anew.
@@ -796,6 +824,29 @@ def t_objects():
         rows.append([task, "sim per attempt", secs(a["timing"]["mean"]["sim"]), secs(b["timing"]["mean"]["sim"])])
     md(["task", "object", "bundled primitives", "`--objects-dir assets/ycb-meshes`"], rows)
     print(f"Largest difference on one object: {widest} attempts.")
+    print()
+
+
+def t_threads():
+    d = f"{out}/threads"
+    head("Two threads in one process against two processes",
+         f"`graspmap eval --task empty_bin --seeds {E['EMPTY_SEEDS']} --n-past-action 8` with `--threads 2`, against the "
+         "same sweep as `--shard 1/2` and `--shard 2/2` with `--threads 1`, both started at once.")
+    one, two = load(f"{d}/one.time.json"), load(f"{d}/two.time.json")
+    shards = [load(f"{d}/shard_{i}.json") for i in (1, 2)]
+    whole = load(f"{d}/one.json")
+    if None in (one, two, whole) or None in shards:
+        raise SystemExit(f"threads: a report or timing under {d} is missing")
+    per = lambda r: r["timing"]["mean"]
+    md(["run", "wall", "attempts", "wall per attempt", "network per attempt"], [
+        ["one process, `--threads 2`", secs(one["wall_s"]), whole["timing"]["attempts"],
+         secs(one["wall_s"] / whole["timing"]["attempts"]), secs(per(whole)["network"])],
+        ["two processes, `--threads 1` each", secs(two["wall_s"]),
+         sum(s["timing"]["attempts"] for s in shards),
+         secs(two["wall_s"] / sum(s["timing"]["attempts"] for s in shards)),
+         " / ".join(secs(per(s)["network"]) for s in shards)],
+    ])
+    print(f"Ratio, one process over two: **{one['wall_s'] / two['wall_s']:.2f}**.")
     print()
 
 

@@ -11,6 +11,7 @@ mod cli;
 mod collect;
 mod common;
 mod depth;
+mod docs;
 mod eval;
 mod importer;
 mod label;
