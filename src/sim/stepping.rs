@@ -115,15 +115,16 @@ mod tests {
 
     #[test]
     fn quarter_steps_keep_a_fast_landing_out_of_the_floor() {
-        // Of seeds 0–270, the drops of 5, 125, 156, 267 and 268 land an object more than 5 mm into
-        // the floor in whole steps; 267 by the widest margin (the hammer, 7.1 mm). If a physics
-        // change moves that, search the seeds again for one that breaks the limit in whole steps.
-        let whole = drop_violations(267, 1);
+        // Of seeds 0–299, 13 drops land an object more than 5 mm into the floor in whole steps
+        // and none in quarter steps; 87 by the widest margin (the hammer, 9.7 mm). If a physics
+        // or object change moves that, search the seeds again for one that breaks the limit in
+        // whole steps.
+        let whole = drop_violations(87, 1);
         assert!(
             !whole.is_empty(),
-            "whole steps no longer break the limit on seed 267; pick another seed"
+            "whole steps no longer break the limit on seed 87; pick another seed"
         );
-        let split = drop_violations(267, FAST_SUBSTEPS);
+        let split = drop_violations(87, FAST_SUBSTEPS);
         assert!(split.is_empty(), "quarter steps: {split:?}");
     }
 }

@@ -159,27 +159,28 @@ fn grasp_67_degrees_off_the_narrow_axis_fails() {
 
 #[test]
 fn grasp_across_a_side_wider_than_the_jaw_fails_but_across_the_narrow_side_succeeds() {
-    // The foam brick is 77 × 92 mm seen from above: 92 mm does not fit the 85 mm opening.
+    // The potted meat can lying flat is 93 × 51 mm seen from above: 93 mm does not fit the 85 mm
+    // opening.
     let camera = Camera::top_down();
     let brick = |cell_pose: f32| {
         placed(
-            "YcbFoamBrick",
+            "YcbPottedMeatCan",
             Pose::from_parts(
-                Vector::new(0.5, 0.0, FLOOR_TOP + 0.028),
+                Vector::new(0.5, 0.0, FLOOR_TOP + 0.035),
                 Rotation::from_rotation_z(cell_pose),
             ),
         )
     };
     let mut cell = brick(0.3);
     let (u, v) = center_pixel(&cell);
-    let wide = cell.object_pose(0).rotation * Vector::Y;
+    let wide = cell.object_pose(0).rotation * Vector::X;
     let outcome = pick_pixel(&mut cell, u, v, image_angle(&camera, wide));
     assert_failure(&outcome, &cell);
 
-    // The 77 mm side leaves 4 mm a side, less than half a pixel: aim at the exact middle.
+    // Across the 51 mm side, aimed at the exact middle.
     let mut cell = brick(0.3);
     let pose = cell.object_pose(0);
-    let narrow = pose.rotation * Vector::X;
+    let narrow = pose.rotation * Vector::Y;
     let frame = cell.capture();
     let tcp = world_grasp(
         &camera,
@@ -276,19 +277,20 @@ fn the_depth_test_passes_a_grasp_across_a_lying_can_and_vetoes_one_along_it_or_b
 }
 
 #[test]
-fn a_push_slides_a_brick_off_the_box_beside_it_and_keeps_both_in_the_bin() {
-    // A foam brick with a gelatin box a finger's width away: the jaw fits round neither side.
+fn a_push_slides_a_tin_off_the_box_beside_it_and_keeps_both_in_the_bin() {
+    // The potted meat can lying flat (93 × 51 mm from above) with a gelatin box a hand's width
+    // beside its long side, room for the closed hand to start between them.
     let mut cell = Workcell::new(&Default::default()).unwrap();
     let brick = cell
         .add_object(
-            &model("YcbFoamBrick"),
-            Pose::from_translation(Vector::new(0.5, 0.0, FLOOR_TOP + 0.028)),
+            &model("YcbPottedMeatCan"),
+            Pose::from_translation(Vector::new(0.5, 0.0, FLOOR_TOP + 0.035)),
         )
         .unwrap();
     let gelatin = cell
         .add_object(
             &model("YcbGelatinBox"),
-            Pose::from_translation(Vector::new(0.5, 0.075, FLOOR_TOP + 0.02)),
+            Pose::from_translation(Vector::new(0.5, 0.14, FLOOR_TOP + 0.016)),
         )
         .unwrap();
     cell.settle(3.0);
