@@ -9,20 +9,19 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::Context as _;
-
 use super::collect::CollectConfig;
 use super::eval::{pushes_by_default, EvalConfig};
 use super::train::TrainOptions;
 use super::{Context, RunBy};
 use crate::data::atomic::write_atomic;
+use crate::data::shard::Shard;
 use crate::data::trials::TrialStore;
 use crate::model::config::TrainConfig;
 use crate::model::unet::Precision;
 use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;
 use crate::policy::PolicyKind;
-use crate::present::eval_report::Task;
+use crate::present::eval_report::{EvalReport, Task};
 use crate::present::kept_reports::DEFAULT_MAX_ATTEMPTS;
 
 /// The learning rate of a round's retraining. It starts from a model that already fits the
@@ -99,7 +98,7 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
         let collect_start = Instant::now();
         let collect = CollectConfig {
             out: dir.join("trials"),
-            seed: round_seed(config.collect.seed, round),
+            seed: stage_seed(config.collect.seed, round),
             checkpoint: current.clone(),
             run_by: RunBy::Improve,
             ..config.collect.clone()
@@ -118,7 +117,7 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
         let model_dir = dir.join("model");
         let train = TrainOptions {
             config: TrainConfig {
-                seed: round_seed(config.train.seed, round),
+                seed: stage_seed(config.train.seed, round),
                 input,
                 ..config.train.clone()
             },
@@ -144,7 +143,9 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
             )?),
             None => None,
         };
-        let (trials, successes) = count_trials(&collect.out)?;
+        let store = TrialStore::new(&collect.out);
+        let tally = store.tally(&store.scenes()?)?;
+        let (trials, successes) = (tally.trials, tally.successes);
         let best_val_loss =
             crate::model::checkpoint::read(&model, "rerun the same improve command")?
                 .meta
@@ -193,23 +194,11 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
     Ok(())
 }
 
-/// A round's seed: its own, so rounds never repeat a scene or a data order.
-fn round_seed(seed: u64, round: u32) -> u64 {
+/// The seed of round `round`'s collection or training, from the one `seed` the user gave it:
+/// its own, so rounds never repeat a scene or a data order. (Not label's `rounds::round_seed`,
+/// the drop seed of a labelling round.)
+fn stage_seed(seed: u64, round: u32) -> u64 {
     seed.wrapping_mul(1_000).wrapping_add(u64::from(round))
-}
-
-/// The trials and successes of a store.
-fn count_trials(dir: &Path) -> anyhow::Result<(usize, usize)> {
-    let store = TrialStore::new(dir);
-    let mut trials = 0;
-    let mut successes = 0;
-    for scene in store.scenes()? {
-        if let Some(record) = store.load_scene(scene)? {
-            trials += record.trials.len();
-            successes += record.trials.iter().filter(|t| t.success).count();
-        }
-    }
-    Ok((trials, successes))
 }
 
 /// empty_bin with the round's model and failure memory 8, reported into the round's folder.
@@ -244,26 +233,19 @@ fn evaluate(
         record: None,
         resume: false,
         check_invariants: false,
-        shard: crate::data::trials::Shard::WHOLE,
+        shard: Shard::WHOLE,
         run_by: RunBy::Improve,
     };
     super::eval::run(&eval_context, config)?;
-    let text = std::fs::read_to_string(&report)
-        .with_context(|| format!("reading {}", report.display()))?;
-    let value: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{} is not JSON", report.display()))?;
-    let runs = value["results"]["runs"]
-        .as_array()
-        .cloned()
-        .unwrap_or_default();
-    let moved: Vec<f64> = runs
-        .iter()
-        .filter_map(|r| r["bin"]["moved"].as_f64())
+    let results = EvalReport::read(&report, "rerun the same improve command")?.results;
+    let moved: Vec<f64> = (results.runs.iter())
+        .filter_map(|r| r.bin.as_ref())
+        .map(|b| b.moved as f64)
         .collect();
-    let attempts: Vec<bool> = runs
-        .iter()
-        .flat_map(|r| r["attempts"].as_array().cloned().unwrap_or_default())
-        .map(|a| a["success"].as_bool().unwrap_or(false))
+    // Over every attempt, pushes included (pick success in the report leaves pushes out).
+    let attempts: Vec<bool> = (results.runs.iter())
+        .flat_map(|r| &r.attempts)
+        .map(|a| a.success)
         .collect();
     Ok(EvalSummary {
         seeds: seeds.to_vec(),

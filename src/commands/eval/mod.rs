@@ -11,6 +11,7 @@ use image::RgbImage;
 mod config;
 mod sweep;
 
+use super::attempt::{objects_in_bin, Look};
 use super::{workers, Context};
 use crate::assets::objects::ObjectModel;
 use crate::data::atomic::save_image_atomic;
@@ -26,7 +27,7 @@ use crate::policy::model::ModelPolicy;
 use crate::policy::push::plan_push;
 use crate::policy::suppression::{Suppression, SuppressionConfig};
 use crate::policy::PolicyKind;
-use crate::policy::{Observation, Policy};
+use crate::policy::Policy;
 use crate::present::envelope::write_versioned_report;
 use crate::present::eval_report::Task;
 use crate::present::eval_report::{
@@ -464,29 +465,12 @@ impl Evaluation<'_> {
         attempt: u32,
         vis: PathBuf,
     ) -> anyhow::Result<AttemptRecord> {
+        let in_bin = objects_in_bin(cell);
         let render_start = Instant::now();
-        let frame = cell.capture();
-        let rgb = frame.to_rgb_image();
+        let look = Look::take(cell, in_bin, drop_seed, attempt);
         let render = render_start.elapsed().as_secs_f64();
-        let in_bin: Vec<u16> = cell
-            .objects()
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| cell.locate(*i) == ObjectLocation::Bin1)
-            .map(|(_, o)| o.id)
-            .collect();
-        let camera = *cell.camera();
-        let view = Observation {
-            camera: &camera,
-            frame: &frame,
-            rgb: &rgb,
-            in_bin: &in_bin,
-            // The policy's own stream: one per attempt, independent of the drop.
-            attempt_seed: drop_seed
-                .wrapping_mul(1_000)
-                .wrapping_add(u64::from(attempt)),
-        };
-        let decision = worker.policy.decide(&view, memory);
+        let (camera, frame, rgb) = (&look.camera, &look.frame, &look.rgb);
+        let decision = worker.policy.decide(&look.observation(), memory);
         let vis_written = match &decision.vis {
             Some(image) => {
                 save_image_atomic(image, &vis)?;
@@ -494,20 +478,14 @@ impl Evaluation<'_> {
             }
             None => None,
         };
-        let aimed_at = decision.grasp.as_ref().ok().and_then(|g| {
-            let id = frame.id_at(g.u, g.v);
-            cell.objects()
-                .iter()
-                .find(|o| o.id == id)
-                .map(|o| o.model.name.clone())
-        });
+        let aimed_at = (decision.grasp.as_ref().ok()).and_then(|&g| look.aimed_at(cell, g));
         if worker.recording.is_some() {
             cell.start_recording(EPISODE_EVERY_STEPS);
         }
         let sim_start = Instant::now();
         let push = match (&decision.grasp, decision.verified) {
             (Ok(g), Some(false)) if self.push_unverified => {
-                plan_push(&HeightMap::new(&camera, &frame), *g)
+                plan_push(&HeightMap::new(camera, frame), *g)
             }
             _ => None,
         };
@@ -516,7 +494,7 @@ impl Evaluation<'_> {
                 let pushed = cell.push(&push);
                 PickOutcome::failure(PickReason::Pushed, pushed.detail)
             }
-            (Ok(g), None) => cell.pick(&world_grasp(&camera, &frame, *g)),
+            (Ok(g), None) => cell.pick(&world_grasp(camera, frame, *g)),
             (Err(why), None) => PickOutcome::failure(PickReason::Ungraspable, why.to_string()),
         };
         let sim = sim_start.elapsed().as_secs_f64();
