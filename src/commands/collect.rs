@@ -138,33 +138,9 @@ pub(crate) fn run(context: &Context, config: CollectConfig) -> anyhow::Result<()
     let mine: Vec<u64> = (0..config.scenes)
         .filter(|&s| config.shard.holds(s))
         .collect();
-    let mut done = 0u64;
-    for &scene in &mine {
-        match store.load_scene(scene)? {
-            Some(record) if record.complete => done += 1,
-            Some(_) => store.remove_scene(scene)?,
-            None if store.scene_dir(scene).exists() => store.remove_scene(scene)?,
-            None => {}
-        }
-    }
-    if done > 0 {
-        context.say(&format!(
-            "resuming: {} of {} already in {}",
-            done,
-            counted(mine.len(), "scene"),
-            store.dir().display()
-        ));
-    }
+    let todo = unfinished(context, &store, &mine)?;
+    let done = (mine.len() - todo.len()) as u64;
     let bar = context.progress_bar("scenes", mine.len() as u64, done);
-    let mut todo = Vec::new();
-    for &scene in &mine {
-        if !store
-            .load_scene(scene)?
-            .is_some_and(|record| record.complete)
-        {
-            todo.push(scene);
-        }
-    }
     let (workers, network_threads) = workers::plan(context.threads, todo.len());
     crate::model::use_threads(network_threads);
     let mut finished = 0;
@@ -194,6 +170,31 @@ pub(crate) fn run(context: &Context, config: CollectConfig) -> anyhow::Result<()
         return Err(interrupted.into());
     }
     finish(context, &store, &config, &mine, start)
+}
+
+/// The scenes of `mine` still to collect, their unfinished folders removed (they are redone
+/// from their seeds); says how many a resumed run finds done.
+fn unfinished(context: &Context, store: &TrialStore, mine: &[u64]) -> anyhow::Result<Vec<u64>> {
+    let mut todo = Vec::new();
+    for &scene in mine {
+        match store.load_scene(scene)? {
+            Some(record) if record.complete => continue,
+            Some(_) => store.remove_scene(scene)?,
+            None if store.scene_dir(scene).exists() => store.remove_scene(scene)?,
+            None => {}
+        }
+        todo.push(scene);
+    }
+    let done = mine.len() - todo.len();
+    if done > 0 {
+        context.say(&format!(
+            "resuming: {} of {} already in {}",
+            done,
+            counted(mine.len(), "scene"),
+            store.dir().display()
+        ));
+    }
+    Ok(todo)
 }
 
 /// Everything that decides a store's bytes: a run resumes a store, and stores merge, only when
@@ -523,7 +524,10 @@ mod tests {
     fn differing_keys_names_each_key_once_in_order() {
         let a = serde_json::json!({"seed": 1, "scenes": 4, "clutter": 3, "policy": "model"});
         let b = serde_json::json!({"scenes": 5, "seed": 2, "policy": "model", "explore": 0.1});
-        assert_eq!(differing_keys(&a, &b), ["clutter", "explore", "scenes", "seed"]);
+        assert_eq!(
+            differing_keys(&a, &b),
+            ["clutter", "explore", "scenes", "seed"]
+        );
         assert!(differing_keys(&a, &a).is_empty());
         assert!(differing_keys(&a, &serde_json::json!(3)).is_empty());
     }

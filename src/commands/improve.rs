@@ -14,6 +14,7 @@ use super::eval::{pushes_by_default, EvalConfig};
 use super::train::TrainOptions;
 use super::{Context, RunBy};
 use crate::data::atomic::write_atomic;
+use crate::data::input::InputKind;
 use crate::data::shard::Shard;
 use crate::data::trials::TrialStore;
 use crate::model::config::TrainConfig;
@@ -87,87 +88,20 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
     let mut summaries: Vec<RoundSummary> = Vec::new();
     let mut current = config.start.clone();
     let mut stores: Vec<PathBuf> = Vec::new();
+    let start = Instant::now();
     for round in 1..=config.rounds {
-        let dir = config.out.join(format!("round_{round:02}"));
-        context.say(&format!(
-            "round {round}/{}: collecting {} scenes with {}",
-            config.rounds,
-            config.collect.scenes,
-            current.display()
-        ));
-        let collect_start = Instant::now();
-        let collect = CollectConfig {
-            out: dir.join("trials"),
-            seed: stage_seed(config.collect.seed, round),
-            checkpoint: current.clone(),
-            run_by: RunBy::Improve,
-            ..config.collect.clone()
-        };
-        super::collect::run(context, collect.clone())?;
-        let collect_seconds = collect_start.elapsed().as_secs_f64();
-        stores.push(collect.out.clone());
-
-        context.say(&format!(
-            "round {round}/{}: retraining from {} on the labels and {} trial store(s)",
-            config.rounds,
-            current.display(),
-            stores.len()
-        ));
-        let train_start = Instant::now();
-        let model_dir = dir.join("model");
-        let train = TrainOptions {
-            config: TrainConfig {
-                seed: stage_seed(config.train.seed, round),
-                input,
-                ..config.train.clone()
-            },
-            resume: false,
-            force: false,
-            out_dir: model_dir.clone(),
-            labels: Some(config.labels.clone()),
-            trials: stores.clone(),
-            start_from: Some(current.clone()),
-            run_by: RunBy::Improve,
-        };
-        super::train::run(context, train)?;
-        let train_seconds = train_start.elapsed().as_secs_f64();
-        let model = model_dir.join("best.safetensors");
-
-        let eval = match &config.eval_seeds {
-            Some(seeds) => Some(evaluate(
-                context,
-                &dir,
-                &model,
-                seeds,
-                config.collect.precision,
-            )?),
-            None => None,
-        };
-        let store = TrialStore::new(&collect.out);
-        let tally = store.tally(&store.scenes()?)?;
-        let (trials, successes) = (tally.trials, tally.successes);
-        let best_val_loss =
-            crate::model::checkpoint::read(&model, "rerun the same improve command")?
-                .meta
-                .map_or(f64::NAN, |m| m.best_val_loss);
+        announce_left(context, round - 1, config.rounds, start.elapsed());
+        let summary = run_round(context, &config, input, round, &current, &mut stores)?;
         summaries.push(RoundSummary {
-            round,
-            collected_with: current.clone(),
-            trials,
-            successes,
-            collection_success_rate: successes as f64 / trials.max(1) as f64,
-            trials_so_far: summaries.iter().map(|s| s.trials).sum::<usize>() + trials,
-            best_val_loss,
-            model: model.clone(),
-            collect_seconds,
-            train_seconds,
-            eval,
+            trials_so_far: summaries.iter().map(|s| s.trials).sum::<usize>() + summary.trials,
+            ..summary
         });
         let summary = summaries.last().expect("just pushed");
+        let dir = config.out.join(format!("round_{round:02}"));
         write_json(&dir.join("summary.json"), summary)?;
         write_json(&config.out.join("summary.json"), &summaries)?;
         context.say(&round_line(summary));
-        current = model;
+        current = summary.model.clone();
     }
     context.say(&format!(
         "the improved model is {}; evaluate it with graspmap eval --checkpoint {}",
@@ -192,6 +126,119 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
         )?;
     }
     Ok(())
+}
+
+/// On a terminal (the stages draw their own progress bars), between rounds: how long the
+/// rounds left should take at the pace of those `done`, `elapsed` in all.
+fn announce_left(context: &Context, done: u32, rounds: u32, elapsed: std::time::Duration) {
+    if done == 0 || done >= rounds || !context.shows_progress() {
+        return;
+    }
+    let left = elapsed / done * (rounds - done);
+    eprintln!(
+        "improve: {done} of {rounds} rounds done in {:#}; about {:#} left at that pace",
+        indicatif::HumanDuration(elapsed),
+        indicatif::HumanDuration(left)
+    );
+}
+
+/// One round: collects with `current` into the round's store (added to `stores`), retrains
+/// from it on the labels and every store so far, and evaluates the new model when asked. Its
+/// summary's `trials_so_far` is left for the caller.
+fn run_round(
+    context: &Context,
+    config: &ImproveConfig,
+    input: InputKind,
+    round: u32,
+    current: &Path,
+    stores: &mut Vec<PathBuf>,
+) -> anyhow::Result<RoundSummary> {
+    let dir = config.out.join(format!("round_{round:02}"));
+    context.say(&format!(
+        "round {round}/{}: collecting {} scenes with {}",
+        config.rounds,
+        config.collect.scenes,
+        current.display()
+    ));
+    let collect_start = Instant::now();
+    let collect = CollectConfig {
+        out: dir.join("trials"),
+        seed: stage_seed(config.collect.seed, round),
+        checkpoint: current.to_path_buf(),
+        run_by: RunBy::Improve,
+        ..config.collect.clone()
+    };
+    super::collect::run(context, collect.clone())?;
+    let collect_seconds = collect_start.elapsed().as_secs_f64();
+    stores.push(collect.out.clone());
+
+    context.say(&format!(
+        "round {round}/{}: retraining from {} on the labels and {} trial store(s)",
+        config.rounds,
+        current.display(),
+        stores.len()
+    ));
+    let train_start = Instant::now();
+    let model = retrain(context, config, input, round, current, stores)?;
+    let train_seconds = train_start.elapsed().as_secs_f64();
+
+    let eval = match &config.eval_seeds {
+        Some(seeds) => Some(evaluate(
+            context,
+            &dir,
+            &model,
+            seeds,
+            config.collect.precision,
+        )?),
+        None => None,
+    };
+    let store = TrialStore::new(&collect.out);
+    let tally = store.tally(&store.scenes()?)?;
+    let best_val_loss = crate::model::checkpoint::read(&model, "rerun the same improve command")?
+        .meta
+        .map_or(f64::NAN, |m| m.best_val_loss);
+    Ok(RoundSummary {
+        round,
+        collected_with: current.to_path_buf(),
+        trials: tally.trials,
+        successes: tally.successes,
+        collection_success_rate: tally.successes as f64 / tally.trials.max(1) as f64,
+        trials_so_far: 0,
+        best_val_loss,
+        model,
+        collect_seconds,
+        train_seconds,
+        eval,
+    })
+}
+
+/// Round `round`'s training: from `current`, on the labels and every store so far, into the
+/// round's `model/` folder. Returns the new model.
+fn retrain(
+    context: &Context,
+    config: &ImproveConfig,
+    input: InputKind,
+    round: u32,
+    current: &Path,
+    stores: &[PathBuf],
+) -> anyhow::Result<PathBuf> {
+    let model_dir = config.out.join(format!("round_{round:02}")).join("model");
+    let train = TrainOptions {
+        config: TrainConfig {
+            seed: stage_seed(config.train.seed, round),
+            input,
+            ..config.train.clone()
+        },
+        resume: false,
+        force: false,
+        out_dir: model_dir.clone(),
+        labels: Some(config.labels.clone()),
+        trials: stores.to_vec(),
+        start_from: Some(current.to_path_buf()),
+        run_by: RunBy::Improve,
+    };
+    super::train::run(context, train)?;
+    Ok(model_dir.join("best.safetensors"))
 }
 
 /// The seed of round `round`'s collection or training, from the one `seed` the user gave it:

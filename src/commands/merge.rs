@@ -95,7 +95,9 @@ fn read_reports(inputs: &[PathBuf]) -> anyhow::Result<Vec<ShardReport>> {
 fn report_shard(report: &EvalReport) -> anyhow::Result<Shard> {
     let path = report.path.display();
     let Some(shard) = &report.config.shard else {
-        bail!("{path} is a whole sweep, not a shard; merge joins the reports of `eval --shard I/N`");
+        bail!(
+            "{path} is a whole sweep, not a shard; merge joins the reports of `eval --shard I/N`"
+        );
     };
     let shard = Shard::parse(shard)
         .map_err(|e| anyhow::anyhow!("{path}: config.shard {e}; rerun that shard"))?;
@@ -376,7 +378,8 @@ fn read_shards(inputs: &[PathBuf]) -> anyhow::Result<Vec<ShardStore>> {
                 );
             }
         }
-        let earlier: Vec<(Shard, &Path)> = shards.iter().map(|s| (s.shard, s.store.dir())).collect();
+        let earlier: Vec<(Shard, &Path)> =
+            shards.iter().map(|s| (s.shard, s.store.dir())).collect();
         shard::check_joins(shard, dir, &earlier, "run")?;
         shards.push(ShardStore {
             store,

@@ -266,9 +266,11 @@ impl TrialStore {
     pub(crate) fn tally(&self, scenes: &[u64]) -> anyhow::Result<TrialTally> {
         let mut records = Vec::with_capacity(scenes.len());
         for &scene in scenes {
-            records.push(self.load_scene(scene)?.with_context(|| {
-                format!("scene {scene} vanished from {}", self.dir.display())
-            })?);
+            records.push(
+                self.load_scene(scene)?.with_context(|| {
+                    format!("scene {scene} vanished from {}", self.dir.display())
+                })?,
+            );
         }
         Ok(TrialTally::of(&records))
     }

@@ -390,7 +390,6 @@ fn failure_tally<'a>(attempts: impl IntoIterator<Item = &'a AttemptRecord>) -> F
 
 /// The human-readable report: a table, the overall rate, and where the time went.
 pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<String> {
-    let mut lines = Vec::new();
     let seeds = results
         .seeds
         .iter()
@@ -404,67 +403,87 @@ pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
     };
     let policy = results.policy.name();
     let task = results.task.name();
-    lines.push(format!(
+    let mut lines = vec![format!(
         "eval --task {task}, policy {policy}, seed {seeds}{suppression}"
-    ));
+    )];
     if results.task == Task::EmptyBin {
-        lines.push(format!(
-            "{:>6} {:>8} {:>9} {:>6} {:>5} {:>5}  failures",
-            "seed", "attempts", "successes", "moved", "left", "lost"
-        ));
-        for run in &results.runs {
-            let Some(bin) = &run.bin else { continue };
-            lines.push(format!(
-                "{:>6} {:>8} {:>9} {:>6} {:>5} {:>5}  {}",
-                run.seed,
-                run.attempts.len(),
-                run.attempts.iter().filter(|a| a.success).count(),
-                bin.moved,
-                bin.left,
-                bin.lost,
-                failure_tally(&run.attempts).describe()
-            ));
-        }
-        if let (Some(moved), Some(lost)) = (&results.moved, &results.lost) {
-            let total = results.runs[0]
-                .bin
-                .as_ref()
-                .map_or(0, |b| b.locations.len());
-            lines.push(format!(
-                "objects moved: {:.1} ± {:.1} of {total} (min {}, max {}, over {} scene{}); lost {:.1}",
-                moved.mean,
-                moved.std,
-                moved.min,
-                moved.max,
-                moved.count,
-                if moved.count == 1 { "" } else { "s" },
-                lost.mean
-            ));
-        }
-        lines.push(format!("pick success: {}", results.success.describe()));
+        lines.extend(scene_table(results));
     } else {
-        let width = results
-            .per_object
-            .iter()
-            .map(|o| o.object.len())
-            .max()
-            .unwrap_or(6)
-            .max(6);
-        lines.push(format!(
-            "{:<width$} {:>8} {:>9}  failures",
-            "object", "attempts", "successes"
-        ));
-        for o in &results.per_object {
-            lines.push(format!(
-                "{:<width$} {:>8} {:>9}  {}",
-                o.object,
-                o.attempts,
-                o.successes,
-                o.failures.describe()
-            ));
-        }
-        lines.push(format!("success rate: {}", results.success.describe()));
+        lines.extend(object_table(results));
     }
+    lines.extend(unverified_lines(results));
+    lines.push(timing_line(&results.timing));
+    lines
+}
+
+/// empty_bin: a line per scene, the objects moved over the scenes and the pick success.
+fn scene_table(results: &EvalResults) -> Vec<String> {
+    let mut lines = vec![format!(
+        "{:>6} {:>8} {:>9} {:>6} {:>5} {:>5}  failures",
+        "seed", "attempts", "successes", "moved", "left", "lost"
+    )];
+    for run in &results.runs {
+        let Some(bin) = &run.bin else { continue };
+        lines.push(format!(
+            "{:>6} {:>8} {:>9} {:>6} {:>5} {:>5}  {}",
+            run.seed,
+            run.attempts.len(),
+            run.attempts.iter().filter(|a| a.success).count(),
+            bin.moved,
+            bin.left,
+            bin.lost,
+            failure_tally(&run.attempts).describe()
+        ));
+    }
+    if let (Some(moved), Some(lost)) = (&results.moved, &results.lost) {
+        let total = results.runs[0]
+            .bin
+            .as_ref()
+            .map_or(0, |b| b.locations.len());
+        lines.push(format!(
+            "objects moved: {:.1} ± {:.1} of {total} (min {}, max {}, over {} scene{}); lost {:.1}",
+            moved.mean,
+            moved.std,
+            moved.min,
+            moved.max,
+            moved.count,
+            if moved.count == 1 { "" } else { "s" },
+            lost.mean
+        ));
+    }
+    lines.push(format!("pick success: {}", results.success.describe()));
+    lines
+}
+
+/// train/test: a line per object and the success rate.
+fn object_table(results: &EvalResults) -> Vec<String> {
+    let width = results
+        .per_object
+        .iter()
+        .map(|o| o.object.len())
+        .max()
+        .unwrap_or(6)
+        .max(6);
+    let mut lines = vec![format!(
+        "{:<width$} {:>8} {:>9}  failures",
+        "object", "attempts", "successes"
+    )];
+    for o in &results.per_object {
+        lines.push(format!(
+            "{:<width$} {:>8} {:>9}  {}",
+            o.object,
+            o.attempts,
+            o.successes,
+            o.failures.describe()
+        ));
+    }
+    lines.push(format!("success rate: {}", results.success.describe()));
+    lines
+}
+
+/// The attempts that executed a grasp (or a push) nothing verified, when there were any.
+fn unverified_lines(results: &EvalResults) -> Vec<String> {
+    let mut lines = Vec::new();
     let (pushed, unverified): (Vec<&AttemptRecord>, Vec<&AttemptRecord>) = results
         .runs
         .iter()
@@ -485,8 +504,12 @@ pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
             counted(pushed.len(), "attempt"),
         ));
     }
-    let t = &results.timing;
-    lines.push(format!(
+    lines
+}
+
+/// Where the time of an attempt went.
+fn timing_line(t: &TimingSummary) -> String {
+    format!(
         "per attempt: {:.2} s wall (median {:.2}) = sim {:.2} + render {:.3} + network {:.3} + other {:.3}; total {:.1} s{}",
         t.mean.wall,
         t.median_wall,
@@ -502,8 +525,7 @@ pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
                 t.total_wall / t.attempts.max(1) as f64
             ),
         }
-    ));
-    lines
+    )
 }
 
 /// Mean per-attempt time.
@@ -563,7 +585,15 @@ mod tests {
             }),
         };
         let names = ["YcbBanana".to_owned()];
-        let results = summarise(Task::EmptyBin, PolicyKind::Random, vec![2], &names, vec![run], 1.5, false);
+        let results = summarise(
+            Task::EmptyBin,
+            PolicyKind::Random,
+            vec![2],
+            &names,
+            vec![run],
+            1.5,
+            false,
+        );
         let config = serde_json::json!({
             "global": {"objects_dir": "bundled:objects", "threads": 1},
             "task": "empty_bin",
@@ -607,20 +637,33 @@ mod tests {
         for (field, remove) in [
             (
                 "results.timing.workers",
-                (|v: &mut Value| v["results"]["timing"].as_object_mut().unwrap().remove("workers"))
-                    as fn(&mut Value) -> Option<Value>,
+                (|v: &mut Value| {
+                    v["results"]["timing"]
+                        .as_object_mut()
+                        .unwrap()
+                        .remove("workers")
+                }) as fn(&mut Value) -> Option<Value>,
             ),
             ("results.runs[0].bin.gave_up", |v| {
-                v["results"]["runs"][0]["bin"].as_object_mut().unwrap().remove("gave_up")
+                v["results"]["runs"][0]["bin"]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("gave_up")
             }),
             ("results.vis_dir", |v| {
                 v["results"].as_object_mut().unwrap().remove("vis_dir")
             }),
             ("total_wall", |v| {
-                v["results"]["timing"].as_object_mut().unwrap().remove("total_wall")
+                v["results"]["timing"]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("total_wall")
             }),
             ("remember", |v| {
-                v["config"]["suppression"].as_object_mut().unwrap().remove("remember")
+                v["config"]["suppression"]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("remember")
             }),
         ] {
             let copy = dir.path().join("copy.json");
@@ -630,8 +673,10 @@ mod tests {
             });
             let error = EvalReport::read(&copy, "fix it").unwrap_err().to_string();
             assert!(
-                error.starts_with(&format!("{} is not a graspmap eval report (", copy.display()))
-                    && error.contains(&format!("`{field}`"))
+                error.starts_with(&format!(
+                    "{} is not a graspmap eval report (",
+                    copy.display()
+                )) && error.contains(&format!("`{field}`"))
                     && error.ends_with("; fix it)"),
                 "{field}: {error}"
             );
@@ -660,6 +705,9 @@ mod tests {
         );
         std::fs::write(&path, "{").unwrap();
         let error = EvalReport::read(&path, "fix it").unwrap_err().to_string();
-        assert!(error.contains("(it does not parse as JSON; fix it)"), "{error}");
+        assert!(
+            error.contains("(it does not parse as JSON; fix it)"),
+            "{error}"
+        );
     }
 }
