@@ -312,47 +312,35 @@ impl Finger {
                 // then never builds up the grip force.
                 .can_sleep(false),
         );
-        let pad = world.insert_collider(
+        // A contact with a held object that reads deeper than the box allows is a
+        // narrow-phase misfire, dropped for the step (penetration.rs): one spun a held pear out
+        // of the jaw on the way to bin 2. The link's contacts are screened like the pad's.
+        let part = |half_length: f32, setback: f32, centre_z: f32| {
             ColliderBuilder::cuboid(
                 GRIPPER.pad_width / 2.0,
                 GRIPPER.pad_thickness / 2.0,
-                GRIPPER.pad_height / 2.0,
+                half_length,
             )
-            .translation(Vector::new(
-                0.0,
-                side * GRIPPER.pad_thickness / 2.0,
-                GRIPPER.tcp_offset - GRIPPER.pad_height / 2.0,
-            ))
+            .translation(Vector::new(0.0, side * setback, centre_z))
             .mass(FINGER_MASS / 2.0)
             .friction(pad_friction)
             .friction_combine_rule(CoefficientCombineRule::Multiply)
             .collision_groups(groups::finger())
-            // A contact with a held object that reads deeper than the box allows is a
-            // narrow-phase misfire, dropped for the step (penetration.rs): one spun a
-            // held pear out of the jaw on the way to bin 2.
-            .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
-            Some(body),
+            .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS)
+        };
+        let pad = part(
+            GRIPPER.pad_height / 2.0,
+            GRIPPER.pad_thickness / 2.0,
+            GRIPPER.tcp_offset - GRIPPER.pad_height / 2.0,
         );
+        let pad = world.insert_collider(pad, Some(body));
         let link_length = GRIPPER.tcp_offset - GRIPPER.pad_height - GRIPPER.palm_length;
-        let link = world.insert_collider(
-            ColliderBuilder::cuboid(
-                GRIPPER.pad_width / 2.0,
-                GRIPPER.pad_thickness / 2.0,
-                link_length / 2.0,
-            )
-            .translation(Vector::new(
-                0.0,
-                side * (LINK_SETBACK + GRIPPER.pad_thickness / 2.0),
-                GRIPPER.palm_length + link_length / 2.0,
-            ))
-            .mass(FINGER_MASS / 2.0)
-            .friction(pad_friction)
-            .friction_combine_rule(CoefficientCombineRule::Multiply)
-            .collision_groups(groups::finger())
-            // Screened like the pad's.
-            .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
-            Some(body),
+        let link = part(
+            link_length / 2.0,
+            LINK_SETBACK + GRIPPER.pad_thickness / 2.0,
+            GRIPPER.palm_length + link_length / 2.0,
         );
+        let link = world.insert_collider(link, Some(body));
         // Anchored at the pads: with the anchor up at the palm, the long lever arm to the
         // pad let rapier's joint solve absorb the motor force (1 N reached the object
         // instead of 40 N).

@@ -963,19 +963,14 @@ fn interrupt_once_said(mut command: Command, phrase: &str) -> Output {
         })
     })
     .collect();
-    let started = Instant::now();
-    while !String::from_utf8_lossy(&said.lock().unwrap()).contains(phrase) {
+    let what = format!("saying {phrase:?}");
+    crate::common::poll_until(&mut child, &what, Duration::from_secs(60), || {
         let text = String::from_utf8_lossy(&said.lock().unwrap()).into_owned();
-        assert!(
-            child.try_wait().unwrap().is_none(),
-            "it ended without saying {phrase:?}: {text}"
-        );
-        assert!(
-            started.elapsed() < Duration::from_secs(60),
-            "it did not say {phrase:?} within a minute: {text}"
-        );
-        std::thread::sleep(Duration::from_millis(10));
-    }
+        match text.contains(phrase) {
+            true => Ok(()),
+            false => Err(text),
+        }
+    });
     crate::common::send_signal(&child, libc::SIGINT);
     let status = child.wait().unwrap();
     let mut outputs = readers.into_iter().map(|r| r.join().unwrap());

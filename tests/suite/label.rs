@@ -7,6 +7,8 @@ use std::time::Duration;
 
 use graspmap::data::labels::{LabelStore, Labels};
 
+use crate::common::poll_until;
+
 const BIN: &str = env!("CARGO_BIN_EXE_graspmap");
 
 fn fixture() -> PathBuf {
@@ -136,22 +138,15 @@ fn a_run_killed_at_any_point_resumes_to_the_same_dataset() {
             .spawn()
             .unwrap();
         let store = LabelStore::new(ws.labels());
-        let started = std::time::Instant::now();
-        loop {
+        let what = format!("{labelled} labels");
+        poll_until(&mut child, &what, Duration::from_secs(120), || {
             let progress = ws.labels().join("progress.json").exists();
-            if progress && store.load().unwrap().len() >= labelled {
-                break;
+            let have = store.load().unwrap().len();
+            match progress && have >= labelled {
+                true => Ok(()),
+                false => Err(format!("{have} labels")),
             }
-            assert!(
-                child.try_wait().unwrap().is_none(),
-                "the run ended before it had {labelled} labels"
-            );
-            assert!(
-                started.elapsed() < Duration::from_secs(120),
-                "no {labelled} labels within 2 min"
-            );
-            std::thread::sleep(Duration::from_millis(2));
-        }
+        });
         child.kill().unwrap();
         let status = child.wait().unwrap();
         // The kill landed mid-run: the process died of it, with the dataset unfinished.

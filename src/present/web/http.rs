@@ -142,7 +142,11 @@ fn read_request(mut stream: TcpStream) -> Result<Incoming, Refused> {
         Ok(head) => head,
         Err(reply) => return Err(reply.map(|reply| (stream, reply))),
     };
-    let (method, target, headers) = match parse_head(&buffer[..head_end]) {
+    let Head {
+        method,
+        target,
+        headers,
+    } = match parse_head(&buffer[..head_end]) {
         Ok(head) => head,
         Err(reply) => return Err(Some((stream, reply))),
     };
@@ -228,8 +232,15 @@ fn read_head(
     }
 }
 
+/// A request's head, parsed.
+struct Head {
+    method: String,
+    target: String,
+    headers: Vec<(String, String)>,
+}
+
 /// The method, target and headers of a request head.
-fn parse_head(head: &[u8]) -> Result<(String, String, Vec<(String, String)>), Reply> {
+fn parse_head(head: &[u8]) -> Result<Head, Reply> {
     let mut headers = [httparse::EMPTY_HEADER; MAX_HEADERS];
     let mut parsed = httparse::Request::new(&mut headers);
     if let Err(e) = parsed.parse(head) {
@@ -255,7 +266,11 @@ fn parse_head(head: &[u8]) -> Result<(String, String, Vec<(String, String)>), Re
             )
         })
         .collect();
-    Ok((method, target, headers))
+    Ok(Head {
+        method,
+        target,
+        headers,
+    })
 }
 
 /// Reads the rest of a body of `length` bytes, `body` holding what came with the head.
