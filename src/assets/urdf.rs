@@ -140,6 +140,22 @@ impl UrdfFile {
     /// Converts one link's visuals, collisions, mass and friction, loading any meshes.
     pub fn link_geometry(&self, index: usize) -> Result<LinkGeometry, UrdfError> {
         let link = &self.robot.links[index];
+        let mass = link.inertial.mass.value as f32;
+        Ok(LinkGeometry {
+            visuals: self.link_visuals(link)?,
+            collisions: self.link_collisions(link)?,
+            mass: (mass > 0.0).then_some(mass),
+            lateral_friction: self
+                .frictions
+                .iter()
+                .find(|(name, _)| *name == link.name)
+                .map(|(_, mu)| *mu),
+        })
+    }
+
+    /// A link's visuals, each mesh piece one, coloured by the material, else by the texture's
+    /// mean, else by the mesh's own colour.
+    fn link_visuals(&self, link: &urdf_rs::Link) -> Result<Vec<Visual>, UrdfError> {
         let mut visuals = Vec::new();
         for visual in &link.visual {
             let pose = urdf_pose(&visual.origin);
@@ -186,6 +202,11 @@ impl UrdfFile {
                 }
             }
         }
+        Ok(visuals)
+    }
+
+    /// A link's collision shapes, each mesh piece a convex hull.
+    fn link_collisions(&self, link: &urdf_rs::Link) -> Result<Vec<Collision>, UrdfError> {
         let mut collisions = Vec::new();
         for collision in &link.collision {
             let pose = urdf_pose(&collision.origin);
@@ -207,17 +228,7 @@ impl UrdfFile {
                 }
             }
         }
-        let mass = link.inertial.mass.value as f32;
-        Ok(LinkGeometry {
-            visuals,
-            collisions,
-            mass: (mass > 0.0).then_some(mass),
-            lateral_friction: self
-                .frictions
-                .iter()
-                .find(|(name, _)| *name == link.name)
-                .map(|(_, mu)| *mu),
-        })
+        Ok(collisions)
     }
 
     /// A material's colour, looking up robot-level materials referenced by name.

@@ -10,7 +10,7 @@ use super::trials::parse_shard;
 use super::values::{
     fraction, named, non_negative_up_to, parse_seed_list, positive_up_to, PrecisionChoice, SeedList,
 };
-use crate::data::trials::Shard;
+use crate::data::shard::Shard;
 use crate::policy::collision::CollisionCheck;
 use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;

@@ -7,6 +7,7 @@ mod trials;
 mod values;
 
 pub(crate) use bench::BenchCommand;
+use bench::BenchTrainArgs;
 pub(crate) use eval::{EvalArgs, PredictArgs};
 use trials::parse_crop;
 pub(crate) use trials::{CollectArgs, ImproveArgs, MergeArgs, TrialArgs};
@@ -401,16 +402,7 @@ fn parse_failure(e: clap::Error) -> anyhow::Result<()> {
 fn dispatch(context: &Context, command: Command, given: &Given) -> anyhow::Result<()> {
     let data = context.data.clone();
     match command {
-        Command::Scene(args) => {
-            let config = SceneConfig {
-                objects: args.objects,
-                seed: args.seed,
-                out: args.out,
-                depth: args.depth,
-            };
-            outputs::scene(context, &config, args.force).check()?;
-            commands::scene::run(context, config)
-        }
+        Command::Scene(args) => scene(context, args),
         Command::Grasp(args) => {
             let force = args.force;
             let config = args.config()?;
@@ -469,25 +461,40 @@ fn dispatch(context: &Context, command: Command, given: &Given) -> anyhow::Resul
             outputs::report(context, &config, force, named)?.check()?;
             commands::report::run(context, config)
         }
-        Command::Bench(BenchCommand::Train(args)) => {
-            let mut files = outputs::base(context, None);
-            files.input("the --python this command runs", args.python.as_deref());
-            files.check()?;
-            commands::bench::run(
-                context,
-                BenchConfig {
-                    steps: args.steps,
-                    rounds: args.rounds,
-                    precision: args.precision.resolve(),
-                    peer: match (args.no_peer, args.python) {
-                        (true, _) => None,
-                        (false, Some(path)) => Some(PeerPython::Given(path)),
-                        (false, None) => Some(PeerPython::Checkout),
-                    },
-                },
-            )
-        }
+        Command::Bench(BenchCommand::Train(args)) => bench_train(context, args),
     }
+}
+
+/// `graspmap scene`.
+fn scene(context: &Context, args: SceneArgs) -> anyhow::Result<()> {
+    let config = SceneConfig {
+        objects: args.objects,
+        seed: args.seed,
+        out: args.out,
+        depth: args.depth,
+    };
+    outputs::scene(context, &config, args.force).check()?;
+    commands::scene::run(context, config)
+}
+
+/// `graspmap bench train`.
+fn bench_train(context: &Context, args: BenchTrainArgs) -> anyhow::Result<()> {
+    let mut files = outputs::base(context, None);
+    files.input("the --python this command runs", args.python.as_deref());
+    files.check()?;
+    commands::bench::run(
+        context,
+        BenchConfig {
+            steps: args.steps,
+            rounds: args.rounds,
+            precision: args.precision.resolve(),
+            peer: match (args.no_peer, args.python) {
+                (true, _) => None,
+                (false, Some(path)) => Some(PeerPython::Given(path)),
+                (false, None) => Some(PeerPython::Checkout),
+            },
+        },
+    )
 }
 
 impl Command {

@@ -22,7 +22,7 @@ use crate::commands::report::ReportConfig;
 use crate::commands::train::TrainOptions;
 use crate::commands::{Context, RunBy};
 use crate::data::output::identity;
-use crate::data::trials::Shard;
+use crate::data::shard::Shard;
 use crate::grasp::PixelGrasp;
 use crate::model::config::TrainConfig;
 use crate::named::Named;

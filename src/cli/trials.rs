@@ -8,7 +8,7 @@ use super::scoped::ObjectsAndSplit;
 use super::values::{fraction, named, parse_seed_list, positive_up_to, PrecisionChoice, SeedList};
 use crate::commands::collect::CollectPolicy;
 use crate::commands::improve::ROUND_LR;
-use crate::data::trials::Shard;
+use crate::data::shard::Shard;
 use crate::model::config::TrainConfig;
 
 /// `graspmap collect`.

@@ -4,15 +4,17 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use super::attempt::{objects_in_bin, Look};
 use super::{workers, Context, RunBy};
 use crate::assets::objects::ObjectModel;
 use crate::data::lock::StoreLock;
 use crate::data::output::check_output_dir;
-use crate::data::trials::{Manifest, SceneTrials, Shard, Trial, TrialStore};
+use crate::data::shard::Shard;
+use crate::data::trials::{Manifest, SceneTrials, Trial, TrialStore, TrialTally};
 use crate::grasp::angle_bin;
 use crate::grasp::world::world_grasp;
 use crate::interrupt;
@@ -25,7 +27,7 @@ use crate::policy::model::{ModelPolicy, ModelPolicyConfig};
 use crate::policy::suppression::{Suppression, SuppressionConfig};
 use crate::policy::{Decision, Observation, Policy};
 use crate::present::envelope::write_report;
-use crate::sim::{ObjectLocation, Workcell, WorkcellConfig};
+use crate::sim::{Workcell, WorkcellConfig};
 
 named_enum! {
     /// Who chooses the grasps that `collect` tries.
@@ -136,33 +138,9 @@ pub(crate) fn run(context: &Context, config: CollectConfig) -> anyhow::Result<()
     let mine: Vec<u64> = (0..config.scenes)
         .filter(|&s| config.shard.holds(s))
         .collect();
-    let mut done = 0u64;
-    for &scene in &mine {
-        match store.load_scene(scene)? {
-            Some(record) if record.complete => done += 1,
-            Some(_) => store.remove_scene(scene)?,
-            None if store.scene_dir(scene).exists() => store.remove_scene(scene)?,
-            None => {}
-        }
-    }
-    if done > 0 {
-        context.say(&format!(
-            "resuming: {} of {} already in {}",
-            done,
-            counted(mine.len(), "scene"),
-            store.dir().display()
-        ));
-    }
+    let todo = unfinished(context, &store, &mine)?;
+    let done = (mine.len() - todo.len()) as u64;
     let bar = context.progress_bar("scenes", mine.len() as u64, done);
-    let mut todo = Vec::new();
-    for &scene in &mine {
-        if !store
-            .load_scene(scene)?
-            .is_some_and(|record| record.complete)
-        {
-            todo.push(scene);
-        }
-    }
     let (workers, network_threads) = workers::plan(context.threads, todo.len());
     crate::model::use_threads(network_threads);
     let mut finished = 0;
@@ -192,6 +170,31 @@ pub(crate) fn run(context: &Context, config: CollectConfig) -> anyhow::Result<()
         return Err(interrupted.into());
     }
     finish(context, &store, &config, &mine, start)
+}
+
+/// The scenes of `mine` still to collect, their unfinished folders removed (they are redone
+/// from their seeds); says how many a resumed run finds done.
+fn unfinished(context: &Context, store: &TrialStore, mine: &[u64]) -> anyhow::Result<Vec<u64>> {
+    let mut todo = Vec::new();
+    for &scene in mine {
+        match store.load_scene(scene)? {
+            Some(record) if record.complete => continue,
+            Some(_) => store.remove_scene(scene)?,
+            None if store.scene_dir(scene).exists() => store.remove_scene(scene)?,
+            None => {}
+        }
+        todo.push(scene);
+    }
+    let done = mine.len() - todo.len();
+    if done > 0 {
+        context.say(&format!(
+            "resuming: {} of {} already in {}",
+            done,
+            counted(mine.len(), "scene"),
+            store.dir().display()
+        ));
+    }
+    Ok(todo)
 }
 
 /// Everything that decides a store's bytes: a run resumes a store, and stores merge, only when
@@ -294,19 +297,17 @@ fn prepare(
     store.save_manifest(&manifest)
 }
 
-/// The top-level keys whose values differ.
-fn differing_keys(a: &serde_json::Value, b: &serde_json::Value) -> Vec<String> {
+/// The top-level keys whose values differ (or that only one side has), each once, sorted.
+pub(crate) fn differing_keys(a: &serde_json::Value, b: &serde_json::Value) -> Vec<String> {
     let (Some(a), Some(b)) = (a.as_object(), b.as_object()) else {
         return Vec::new();
     };
-    let mut keys: Vec<String> = a
+    let keys: std::collections::BTreeSet<&String> = a
         .keys()
         .chain(b.keys())
-        .filter(|k| a.get(*k) != b.get(*k))
-        .cloned()
+        .filter(|k| a.get(k.as_str()) != b.get(k.as_str()))
         .collect();
-    keys.dedup();
-    keys
+    keys.into_iter().cloned().collect()
 }
 
 /// The drop seed of scene `scene` of the run seeded `seed`: its own ChaCha stream, so scenes
@@ -352,44 +353,21 @@ fn collect_scene(
         if interrupt::requested().is_some() {
             return Ok(false);
         }
-        let in_bin: Vec<u16> = cell
-            .objects()
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| cell.locate(*i) == ObjectLocation::Bin1)
-            .map(|(_, o)| o.id)
-            .collect();
+        let in_bin = objects_in_bin(&cell);
         if in_bin.is_empty() {
             break;
         }
-        let frame = cell.capture();
-        let rgb = frame.to_rgb_image();
-        let camera = *cell.camera();
-        let attempt_seed = drop_seed
-            .wrapping_mul(1_000)
-            .wrapping_add(u64::from(attempt));
-        let view = Observation {
-            camera: &camera,
-            frame: &frame,
-            rgb: &rgb,
-            in_bin: &in_bin,
-            attempt_seed,
-        };
-        let mut rng = ChaCha8Rng::seed_from_u64(attempt_seed);
+        let look = Look::take(&cell, in_bin, drop_seed, attempt);
+        let mut rng = ChaCha8Rng::seed_from_u64(look.attempt_seed);
         rng.set_stream(7);
+        let view = look.observation();
         let Some((who, decision)) = decide(config, policies, &view, &memory, &mut rng) else {
             // Nothing to try (the oracle found no grasp): the scene would only repeat itself.
             break;
         };
         let Ok(grasp) = decision.grasp else { break };
-        let aimed_at = {
-            let id = frame.id_at(grasp.u, grasp.v);
-            cell.objects()
-                .iter()
-                .find(|o| o.id == id)
-                .map(|o| o.model.name.clone())
-        };
-        let outcome = cell.pick(&world_grasp(&camera, &frame, grasp));
+        let aimed_at = look.aimed_at(&cell, grasp);
+        let outcome = cell.pick(&world_grasp(&look.camera, &look.frame, grasp));
         memory.record(grasp, outcome.success);
         bar.set_message(format!(
             "scene {scene} attempt {attempt}: {who} {}",
@@ -408,7 +386,7 @@ fn collect_scene(
             aimed_at,
             held: outcome.object,
         });
-        store.append(&record, &rgb, &frame.to_depth_image_mm())?;
+        store.append(&record, &look.rgb, &look.frame.to_depth_image_mm())?;
     }
     record.complete = true;
     store.save_scene(&record)?;
@@ -464,30 +442,17 @@ fn finish(
     mine: &[u64],
     start: Instant,
 ) -> anyhow::Result<()> {
-    let mut results = CollectResults {
+    let tally = store.tally(mine)?;
+    let results = CollectResults {
         store: store.dir().to_path_buf(),
         shard: config.shard.to_string(),
-        scenes: 0,
-        trials: 0,
-        successes: 0,
-        success_rate: 0.0,
-        by_policy: Default::default(),
+        scenes: tally.scenes,
+        trials: tally.trials,
+        successes: tally.successes,
+        success_rate: tally.successes as f64 / tally.trials.max(1) as f64,
+        by_policy: tally.by_policy,
         wall_seconds: start.elapsed().as_secs_f64(),
     };
-    for &scene in mine {
-        let record = store
-            .load_scene(scene)?
-            .with_context(|| format!("scene {scene} vanished from {}", store.dir().display()))?;
-        results.scenes += 1;
-        for trial in &record.trials {
-            results.trials += 1;
-            results.successes += usize::from(trial.success);
-            let entry = results.by_policy.entry(trial.policy.clone()).or_default();
-            entry.0 += 1;
-            entry.1 += usize::from(trial.success);
-        }
-    }
-    results.success_rate = results.successes as f64 / results.trials.max(1) as f64;
     let by_policy: Vec<String> = results
         .by_policy
         .iter()
@@ -524,11 +489,12 @@ pub(crate) fn check(context: &Context, dir: &std::path::Path) -> anyhow::Result<
         context.say(problem);
     }
     let scenes = store.scenes().unwrap_or_default();
-    let trials: usize = scenes
+    // A damaged scene is a problem above; the count is of the others.
+    let readable: Vec<SceneTrials> = scenes
         .iter()
         .filter_map(|&s| store.load_scene(s).ok().flatten())
-        .map(|r| r.trials.len())
-        .sum();
+        .collect();
+    let trials = TrialTally::of(&readable).trials;
     if let Some(json) = &context.json {
         let resolved = serde_json::json!({ "global": context, "check": dir });
         let results = serde_json::json!({ "store": dir, "scenes": scenes.len(), "trials": trials, "problems": problems });
@@ -548,4 +514,21 @@ pub(crate) fn check(context: &Context, dir: &std::path::Path) -> anyhow::Result<
         counted(scenes.len(), "scene")
     ));
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn differing_keys_names_each_key_once_in_order() {
+        let a = serde_json::json!({"seed": 1, "scenes": 4, "clutter": 3, "policy": "model"});
+        let b = serde_json::json!({"scenes": 5, "seed": 2, "policy": "model", "explore": 0.1});
+        assert_eq!(
+            differing_keys(&a, &b),
+            ["clutter", "explore", "scenes", "seed"]
+        );
+        assert!(differing_keys(&a, &a).is_empty());
+        assert!(differing_keys(&a, &serde_json::json!(3)).is_empty());
+    }
 }

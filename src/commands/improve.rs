@@ -9,20 +9,20 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::Context as _;
-
 use super::collect::CollectConfig;
 use super::eval::{pushes_by_default, EvalConfig};
 use super::train::TrainOptions;
 use super::{Context, RunBy};
 use crate::data::atomic::write_atomic;
+use crate::data::input::InputKind;
+use crate::data::shard::Shard;
 use crate::data::trials::TrialStore;
 use crate::model::config::TrainConfig;
 use crate::model::unet::Precision;
 use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;
 use crate::policy::PolicyKind;
-use crate::present::eval_report::Task;
+use crate::present::eval_report::{EvalReport, Task};
 use crate::present::kept_reports::DEFAULT_MAX_ATTEMPTS;
 
 /// The learning rate of a round's retraining. It starts from a model that already fits the
@@ -88,85 +88,20 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
     let mut summaries: Vec<RoundSummary> = Vec::new();
     let mut current = config.start.clone();
     let mut stores: Vec<PathBuf> = Vec::new();
+    let start = Instant::now();
     for round in 1..=config.rounds {
-        let dir = config.out.join(format!("round_{round:02}"));
-        context.say(&format!(
-            "round {round}/{}: collecting {} scenes with {}",
-            config.rounds,
-            config.collect.scenes,
-            current.display()
-        ));
-        let collect_start = Instant::now();
-        let collect = CollectConfig {
-            out: dir.join("trials"),
-            seed: round_seed(config.collect.seed, round),
-            checkpoint: current.clone(),
-            run_by: RunBy::Improve,
-            ..config.collect.clone()
-        };
-        super::collect::run(context, collect.clone())?;
-        let collect_seconds = collect_start.elapsed().as_secs_f64();
-        stores.push(collect.out.clone());
-
-        context.say(&format!(
-            "round {round}/{}: retraining from {} on the labels and {} trial store(s)",
-            config.rounds,
-            current.display(),
-            stores.len()
-        ));
-        let train_start = Instant::now();
-        let model_dir = dir.join("model");
-        let train = TrainOptions {
-            config: TrainConfig {
-                seed: round_seed(config.train.seed, round),
-                input,
-                ..config.train.clone()
-            },
-            resume: false,
-            force: false,
-            out_dir: model_dir.clone(),
-            labels: Some(config.labels.clone()),
-            trials: stores.clone(),
-            start_from: Some(current.clone()),
-            run_by: RunBy::Improve,
-        };
-        super::train::run(context, train)?;
-        let train_seconds = train_start.elapsed().as_secs_f64();
-        let model = model_dir.join("best.safetensors");
-
-        let eval = match &config.eval_seeds {
-            Some(seeds) => Some(evaluate(
-                context,
-                &dir,
-                &model,
-                seeds,
-                config.collect.precision,
-            )?),
-            None => None,
-        };
-        let (trials, successes) = count_trials(&collect.out)?;
-        let best_val_loss =
-            crate::model::checkpoint::read(&model, "rerun the same improve command")?
-                .meta
-                .map_or(f64::NAN, |m| m.best_val_loss);
+        announce_left(context, round - 1, config.rounds, start.elapsed());
+        let summary = run_round(context, &config, input, round, &current, &mut stores)?;
         summaries.push(RoundSummary {
-            round,
-            collected_with: current.clone(),
-            trials,
-            successes,
-            collection_success_rate: successes as f64 / trials.max(1) as f64,
-            trials_so_far: summaries.iter().map(|s| s.trials).sum::<usize>() + trials,
-            best_val_loss,
-            model: model.clone(),
-            collect_seconds,
-            train_seconds,
-            eval,
+            trials_so_far: summaries.iter().map(|s| s.trials).sum::<usize>() + summary.trials,
+            ..summary
         });
         let summary = summaries.last().expect("just pushed");
+        let dir = config.out.join(format!("round_{round:02}"));
         write_json(&dir.join("summary.json"), summary)?;
         write_json(&config.out.join("summary.json"), &summaries)?;
         context.say(&round_line(summary));
-        current = model;
+        current = summary.model.clone();
     }
     context.say(&format!(
         "the improved model is {}; evaluate it with graspmap eval --checkpoint {}",
@@ -193,23 +128,124 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
     Ok(())
 }
 
-/// A round's seed: its own, so rounds never repeat a scene or a data order.
-fn round_seed(seed: u64, round: u32) -> u64 {
-    seed.wrapping_mul(1_000).wrapping_add(u64::from(round))
+/// On a terminal (the stages draw their own progress bars), between rounds: how long the
+/// rounds left should take at the pace of those `done`, `elapsed` in all.
+fn announce_left(context: &Context, done: u32, rounds: u32, elapsed: std::time::Duration) {
+    if done == 0 || done >= rounds || !context.shows_progress() {
+        return;
+    }
+    let left = elapsed / done * (rounds - done);
+    eprintln!(
+        "improve: {done} of {rounds} rounds done in {:#}; about {:#} left at that pace",
+        indicatif::HumanDuration(elapsed),
+        indicatif::HumanDuration(left)
+    );
 }
 
-/// The trials and successes of a store.
-fn count_trials(dir: &Path) -> anyhow::Result<(usize, usize)> {
-    let store = TrialStore::new(dir);
-    let mut trials = 0;
-    let mut successes = 0;
-    for scene in store.scenes()? {
-        if let Some(record) = store.load_scene(scene)? {
-            trials += record.trials.len();
-            successes += record.trials.iter().filter(|t| t.success).count();
-        }
-    }
-    Ok((trials, successes))
+/// One round: collects with `current` into the round's store (added to `stores`), retrains
+/// from it on the labels and every store so far, and evaluates the new model when asked. Its
+/// summary's `trials_so_far` is left for the caller.
+fn run_round(
+    context: &Context,
+    config: &ImproveConfig,
+    input: InputKind,
+    round: u32,
+    current: &Path,
+    stores: &mut Vec<PathBuf>,
+) -> anyhow::Result<RoundSummary> {
+    let dir = config.out.join(format!("round_{round:02}"));
+    context.say(&format!(
+        "round {round}/{}: collecting {} scenes with {}",
+        config.rounds,
+        config.collect.scenes,
+        current.display()
+    ));
+    let collect_start = Instant::now();
+    let collect = CollectConfig {
+        out: dir.join("trials"),
+        seed: stage_seed(config.collect.seed, round),
+        checkpoint: current.to_path_buf(),
+        run_by: RunBy::Improve,
+        ..config.collect.clone()
+    };
+    super::collect::run(context, collect.clone())?;
+    let collect_seconds = collect_start.elapsed().as_secs_f64();
+    stores.push(collect.out.clone());
+
+    context.say(&format!(
+        "round {round}/{}: retraining from {} on the labels and {} trial store(s)",
+        config.rounds,
+        current.display(),
+        stores.len()
+    ));
+    let train_start = Instant::now();
+    let model = retrain(context, config, input, round, current, stores)?;
+    let train_seconds = train_start.elapsed().as_secs_f64();
+
+    let eval = match &config.eval_seeds {
+        Some(seeds) => Some(evaluate(
+            context,
+            &dir,
+            &model,
+            seeds,
+            config.collect.precision,
+        )?),
+        None => None,
+    };
+    let store = TrialStore::new(&collect.out);
+    let tally = store.tally(&store.scenes()?)?;
+    let best_val_loss = crate::model::checkpoint::read(&model, "rerun the same improve command")?
+        .meta
+        .map_or(f64::NAN, |m| m.best_val_loss);
+    Ok(RoundSummary {
+        round,
+        collected_with: current.to_path_buf(),
+        trials: tally.trials,
+        successes: tally.successes,
+        collection_success_rate: tally.successes as f64 / tally.trials.max(1) as f64,
+        trials_so_far: 0,
+        best_val_loss,
+        model,
+        collect_seconds,
+        train_seconds,
+        eval,
+    })
+}
+
+/// Round `round`'s training: from `current`, on the labels and every store so far, into the
+/// round's `model/` folder. Returns the new model.
+fn retrain(
+    context: &Context,
+    config: &ImproveConfig,
+    input: InputKind,
+    round: u32,
+    current: &Path,
+    stores: &[PathBuf],
+) -> anyhow::Result<PathBuf> {
+    let model_dir = config.out.join(format!("round_{round:02}")).join("model");
+    let train = TrainOptions {
+        config: TrainConfig {
+            seed: stage_seed(config.train.seed, round),
+            input,
+            ..config.train.clone()
+        },
+        resume: false,
+        force: false,
+        out_dir: model_dir.clone(),
+        labels: Some(config.labels.clone()),
+        trials: stores.to_vec(),
+        start_from: Some(current.to_path_buf()),
+        run_by: RunBy::Improve,
+    };
+    super::train::run(context, train)?;
+    Ok(model_dir.join("best.safetensors"))
+}
+
+/// The seed of round `round`'s collection or training, from the one `seed` the user gave it:
+/// its own, so rounds never repeat a scene or a data order. (Not label's `rounds::round_seed`,
+/// the drop seed of a labelling round.)
+fn stage_seed(seed: u64, round: u32) -> u64 {
+    seed.wrapping_mul(1_000).wrapping_add(u64::from(round))
 }
 
 /// empty_bin with the round's model and failure memory 8, reported into the round's folder.
@@ -244,26 +280,19 @@ fn evaluate(
         record: None,
         resume: false,
         check_invariants: false,
-        shard: crate::data::trials::Shard::WHOLE,
+        shard: Shard::WHOLE,
         run_by: RunBy::Improve,
     };
     super::eval::run(&eval_context, config)?;
-    let text = std::fs::read_to_string(&report)
-        .with_context(|| format!("reading {}", report.display()))?;
-    let value: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{} is not JSON", report.display()))?;
-    let runs = value["results"]["runs"]
-        .as_array()
-        .cloned()
-        .unwrap_or_default();
-    let moved: Vec<f64> = runs
-        .iter()
-        .filter_map(|r| r["bin"]["moved"].as_f64())
+    let results = EvalReport::read(&report, "rerun the same improve command")?.results;
+    let moved: Vec<f64> = (results.runs.iter())
+        .filter_map(|r| r.bin.as_ref())
+        .map(|b| b.moved as f64)
         .collect();
-    let attempts: Vec<bool> = runs
-        .iter()
-        .flat_map(|r| r["attempts"].as_array().cloned().unwrap_or_default())
-        .map(|a| a["success"].as_bool().unwrap_or(false))
+    // Over every attempt, pushes included (pick success in the report leaves pushes out).
+    let attempts: Vec<bool> = (results.runs.iter())
+        .flat_map(|r| &r.attempts)
+        .map(|a| a.success)
         .collect();
     Ok(EvalSummary {
         seeds: seeds.to_vec(),

@@ -8,9 +8,11 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context as _};
 
 use super::Context;
-use crate::data::trials::{Manifest, Shard, TrialStore, MANIFEST_FILE};
+use crate::data::shard::{self, Shard};
+use crate::data::trials::{Manifest, TrialStore, MANIFEST_FILE};
 use crate::named::counted;
-use crate::present::envelope::write_report;
+use crate::present::envelope::{write_report, write_versioned_report};
+use crate::present::eval_report::{report_lines, summarise, EvalReport, SceneRun};
 
 /// What `graspmap merge` runs.
 #[derive(Debug, Clone)]
@@ -48,8 +50,7 @@ pub(crate) fn run(context: &Context, config: MergeConfig) -> anyhow::Result<()> 
 
 /// One shard's eval report, read and checked.
 struct ShardReport {
-    path: PathBuf,
-    value: serde_json::Value,
+    report: EvalReport,
     shard: Shard,
 }
 
@@ -72,93 +73,17 @@ fn sweep_identity(config: &serde_json::Value) -> serde_json::Value {
 fn read_reports(inputs: &[PathBuf]) -> anyhow::Result<Vec<ShardReport>> {
     let mut shards: Vec<ShardReport> = Vec::new();
     for path in inputs {
-        let text =
-            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
-        let value: serde_json::Value = serde_json::from_str(&text).with_context(|| {
-            format!(
-                "{} is not a graspmap eval report (it does not parse as JSON; rerun that shard)",
-                path.display()
-            )
-        })?;
-        if value["schema"] != "graspmap.eval/2" {
-            bail!(
-                "{} is not a graspmap eval report (schema {}, expected graspmap.eval/2; rerun that shard)",
-                path.display(),
-                value["schema"]
-            );
-        }
-        let Some(shard) = value["config"]["shard"].as_str() else {
-            bail!(
-                "{} is a whole sweep, not a shard; merge joins the reports of `eval --shard I/N`",
-                path.display()
-            );
-        };
-        let shard = Shard::parse(shard).map_err(|e| {
-            anyhow::anyhow!("{}: config.shard {e}; rerun that shard", path.display())
-        })?;
-        if value["results"]["interrupted"] == true {
-            bail!(
-                "{} (shard {shard}) is unfinished: it was interrupted; finish it with its eval command and --resume",
-                path.display()
-            );
-        }
-        let commit = value["git_commit"].as_str().unwrap_or_default();
-        let ours = env!("GRASPMAP_GIT_COMMIT");
-        if commit != ours {
-            bail!(
-                "{} was written by graspmap at commit {commit}, and this merge is commit {ours}; run the shards and the merge with one build",
-                path.display()
-            );
-        }
+        let report = EvalReport::read(path, "rerun that shard")?;
+        let shard = report_shard(&report)?;
         if let Some(first) = shards.first() {
-            let (a, b) = (&first.value["config"], &value["config"]);
-            if a["checkpoint_sha256"] != b["checkpoint_sha256"] {
-                bail!(
-                    "{} was evaluated with another checkpoint than {} (SHA-256 {} against {}); merge only the shards of one sweep",
-                    path.display(),
-                    first.path.display(),
-                    b["checkpoint_sha256"],
-                    a["checkpoint_sha256"]
-                );
-            }
-            if a["objects"] != b["objects"]
-                || a["global"]["objects_dir"] != b["global"]["objects_dir"]
-            {
-                bail!(
-                    "{} was evaluated on another object set than {}; merge only the shards of one sweep",
-                    path.display(),
-                    first.path.display()
-                );
-            }
-            if sweep_identity(a) != sweep_identity(b) {
-                bail!(
-                    "{} was run with another configuration than {} ({}differ); merge only the shards of one sweep",
-                    path.display(),
-                    first.path.display(),
-                    differing(&sweep_identity(a), &sweep_identity(b))
-                );
-            }
-            if first.shard.count != shard.count {
-                bail!(
-                    "{} is shard {shard}, and {} is shard {}: the shard counts differ; merge only the shards of one sweep",
-                    path.display(),
-                    first.path.display(),
-                    first.shard
-                );
-            }
+            check_same_sweep(&first.report, &report)?;
         }
-        if let Some(twin) = shards.iter().find(|s| s.shard == shard) {
-            bail!(
-                "{} and {} both hold shard {shard}: the shards overlap; give each shard once",
-                twin.path.display(),
-                path.display()
-            );
-        }
-        shards.push(ShardReport {
-            path: path.clone(),
-            value,
-            shard,
-        });
+        let earlier: Vec<(Shard, &Path)> = shards
+            .iter()
+            .map(|s| (s.shard, s.report.path.as_path()))
+            .collect();
+        shard::check_joins(shard, path, &earlier, "sweep")?;
+        shards.push(ShardReport { report, shard });
     }
     if shards.is_empty() {
         bail!("merge needs at least one shard report (the --json files of `eval --shard I/N`)");
@@ -166,81 +91,130 @@ fn read_reports(inputs: &[PathBuf]) -> anyhow::Result<Vec<ShardReport>> {
     Ok(shards)
 }
 
+/// The shard a finished report of this build holds.
+fn report_shard(report: &EvalReport) -> anyhow::Result<Shard> {
+    let path = report.path.display();
+    let Some(shard) = &report.config.shard else {
+        bail!(
+            "{path} is a whole sweep, not a shard; merge joins the reports of `eval --shard I/N`"
+        );
+    };
+    let shard = Shard::parse(shard)
+        .map_err(|e| anyhow::anyhow!("{path}: config.shard {e}; rerun that shard"))?;
+    if report.results.interrupted {
+        bail!(
+            "{path} (shard {shard}) is unfinished: it was interrupted; finish it with its eval command and --resume"
+        );
+    }
+    let (commit, ours) = (&report.git_commit, env!("GRASPMAP_GIT_COMMIT"));
+    if commit != ours {
+        bail!(
+            "{path} was written by graspmap at commit {commit}, and this merge is commit {ours}; run the shards and the merge with one build"
+        );
+    }
+    Ok(shard)
+}
+
+/// Refuses `report` when it belongs to another sweep than `first`.
+fn check_same_sweep(first: &EvalReport, report: &EvalReport) -> anyhow::Result<()> {
+    let (a, b) = (&first.config, &report.config);
+    let (path, first_path) = (report.path.display(), first.path.display());
+    if a.checkpoint_sha256 != b.checkpoint_sha256 {
+        bail!(
+            "{path} was evaluated with another checkpoint than {first_path} (SHA-256 {} against {}); merge only the shards of one sweep",
+            serde_json::json!(b.checkpoint_sha256),
+            serde_json::json!(a.checkpoint_sha256)
+        );
+    }
+    if a.objects != b.objects || a.global != b.global {
+        bail!(
+            "{path} was evaluated on another object set than {first_path}; merge only the shards of one sweep"
+        );
+    }
+    let (a, b) = (
+        sweep_identity(&first.config_value),
+        sweep_identity(&report.config_value),
+    );
+    if a != b {
+        bail!(
+            "{path} was run with another configuration than {first_path} ({}differ); merge only the shards of one sweep",
+            differing(&a, &b)
+        );
+    }
+    Ok(())
+}
+
 /// Joins eval shard reports into the whole sweep's report.
 fn merge_reports(context: &Context, config: &MergeConfig) -> anyhow::Result<()> {
-    use crate::present::eval_report::{report_lines, summarise, SceneRun, Task};
     let shards = read_reports(&config.inputs)?;
-    let first = &shards[0];
-    let count = first.shard.count;
-    let sweep: Vec<u64> = serde_json::from_value(first.value["config"]["seeds"].clone())
-        .with_context(|| format!("{}: config.seeds is not a seed list", first.path.display()))?;
-    let missing: Vec<Shard> = (1..=count)
-        .map(|index| Shard { index, count })
-        .filter(|s| !shards.iter().any(|given| given.shard == *s))
-        .collect();
+    let first = &shards[0].report;
+    let count = shards[0].shard.count;
+    let given: Vec<Shard> = shards.iter().map(|s| s.shard).collect();
+    let missing = shard::missing(count, &given);
     if !missing.is_empty() && !config.allow_partial {
-        let names: Vec<String> = missing.iter().map(Shard::to_string).collect();
         bail!(
             "shards {} of {count} are missing (run them with eval --shard I/{count}, or pass --allow-partial to merge what is there)",
-            names.join(", ")
+            names(&missing)
         );
     }
     crate::data::output::check_output_file(&config.out, "--out")?;
+    let sweep = &first.config.seeds;
     let mut runs: Vec<SceneRun> = Vec::new();
     let mut total_wall = 0.0;
     let mut workers = 1;
-    for shard in &shards {
-        let expected: Vec<u64> = sweep
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| shard.shard.holds(*i as u64))
+    for ShardReport { report, shard } in &shards {
+        let expected: Vec<u64> = (sweep.iter().enumerate())
+            .filter(|(i, _)| shard.holds(*i as u64))
             .map(|(_, &s)| s)
             .collect();
-        let mine: Vec<SceneRun> = serde_json::from_value(shard.value["results"]["runs"].clone())
-            .with_context(|| {
-                format!(
-                    "{}: results.runs is not a list of scenes (rerun that shard)",
-                    shard.path.display()
-                )
-            })?;
-        let seeds: Vec<u64> = mine.iter().map(|r| r.seed).collect();
+        let seeds: Vec<u64> = report.results.runs.iter().map(|r| r.seed).collect();
         if seeds != expected {
             bail!(
-                "{} (shard {}) holds seeds {:?}, and shard {} of --seeds holds {:?}; rerun that shard",
-                shard.path.display(),
-                shard.shard,
-                seeds,
-                shard.shard,
-                expected
+                "{} (shard {shard}) holds seeds {seeds:?}, and shard {shard} of --seeds holds {expected:?}; rerun that shard",
+                report.path.display(),
             );
         }
-        total_wall += shard.value["results"]["timing"]["total_wall"]
-            .as_f64()
-            .unwrap_or(0.0);
-        workers = workers.max(
-            shard.value["results"]["timing"]["workers"]
-                .as_u64()
-                .map_or(1, |w| w as usize),
-        );
-        runs.extend(mine);
+        total_wall += report.results.timing.total_wall;
+        workers = workers.max(report.results.timing.workers);
+        runs.extend(report.results.runs.iter().cloned());
     }
     runs.sort_by_key(|r| sweep.iter().position(|&s| s == r.seed));
-    let config_value = &first.value["config"];
-    let task: Task = serde_json::from_value(config_value["task"].clone())
-        .with_context(|| format!("{}: config.task", first.path.display()))?;
-    let policy: crate::policy::PolicyKind = serde_json::from_value(config_value["policy"].clone())
-        .with_context(|| format!("{}: config.policy", first.path.display()))?;
-    let names: Vec<String> = serde_json::from_value(config_value["objects"].clone())
-        .with_context(|| format!("{}: config.objects", first.path.display()))?;
+    let settings = &first.config;
     let seeds: Vec<u64> = runs.iter().map(|r| r.seed).collect();
-    let mut results = summarise(task, policy, seeds, &names, runs, total_wall, false);
+    let mut results = summarise(
+        settings.task,
+        settings.policy,
+        seeds,
+        &settings.objects,
+        runs,
+        total_wall,
+        false,
+    );
     results.timing.workers = workers;
-    results.vis_dir = serde_json::from_value(first.value["results"]["vis_dir"].clone())
-        .ok()
-        .flatten();
-    let mut merged_config = config_value.clone();
-    merged_config["global"]["json"] = serde_json::Value::from(config.out.display().to_string());
-    if let Some(map) = merged_config.as_object_mut() {
+    results.vis_dir = first.results.vis_dir.clone();
+    for line in report_lines(&results, settings.suppression.remember) {
+        context.say(&line);
+    }
+    let merged_config = merged_config(first, &config.out, &missing);
+    write_versioned_report(&config.out, "eval", 2, sweep[0], &merged_config, &results)?;
+    context.say(&format!(
+        "merged {} of {count} into {}{}",
+        counted(shards.len(), "shard"),
+        config.out.display(),
+        match missing.is_empty() {
+            true => String::new(),
+            false => format!(" (partial: shards {} missing)", names(&missing)),
+        }
+    ));
+    Ok(())
+}
+
+/// The merged report's config: the first shard's, written to `out`, with no shard of its own
+/// and the missing ones named.
+fn merged_config(first: &EvalReport, out: &Path, missing: &[Shard]) -> serde_json::Value {
+    let mut merged = first.config_value.clone();
+    merged["global"]["json"] = serde_json::Value::from(out.display().to_string());
+    if let Some(map) = merged.as_object_mut() {
         map.remove("shard");
         if !missing.is_empty() {
             map.insert(
@@ -249,37 +223,13 @@ fn merge_reports(context: &Context, config: &MergeConfig) -> anyhow::Result<()> 
             );
         }
     }
-    let remember = config_value["suppression"]["remember"]
-        .as_u64()
-        .unwrap_or(0) as usize;
-    for line in report_lines(&results, remember) {
-        context.say(&line);
-    }
-    crate::present::envelope::write_versioned_report(
-        &config.out,
-        "eval",
-        2,
-        sweep[0],
-        &merged_config,
-        &results,
-    )?;
-    context.say(&format!(
-        "merged {} of {count} into {}{}",
-        counted(shards.len(), "shard"),
-        config.out.display(),
-        match missing.is_empty() {
-            true => String::new(),
-            false => format!(
-                " (partial: shards {} missing)",
-                missing
-                    .iter()
-                    .map(Shard::to_string)
-                    .collect::<Vec<_>>()
-                    .join(", ")
-            ),
-        }
-    ));
-    Ok(())
+    merged
+}
+
+/// "2/4, 3/4".
+fn names(shards: &[Shard]) -> String {
+    let names: Vec<String> = shards.iter().map(Shard::to_string).collect();
+    names.join(", ")
 }
 
 /// Joins shard trial stores into one store.
@@ -287,16 +237,12 @@ fn merge_stores(context: &Context, config: &MergeConfig) -> anyhow::Result<()> {
     let shards = read_shards(&config.inputs)?;
     let first = &shards[0];
     let count = first.shard.count;
-    let mut missing: Vec<Shard> = (1..=count)
-        .map(|index| Shard { index, count })
-        .filter(|s| !shards.iter().any(|given| given.shard == *s))
-        .collect();
-    missing.sort_by_key(|s| s.index);
+    let given: Vec<Shard> = shards.iter().map(|s| s.shard).collect();
+    let missing = shard::missing(count, &given);
     if !missing.is_empty() && !config.allow_partial {
-        let names: Vec<String> = missing.iter().map(Shard::to_string).collect();
         bail!(
             "shards {} of {count} are missing (collect them with --shard I/{count}, or pass --allow-partial to merge what is there)",
-            names.join(", ")
+            names(&missing)
         );
     }
     check_output(&config.out)?;
@@ -309,14 +255,13 @@ fn merge_stores(context: &Context, config: &MergeConfig) -> anyhow::Result<()> {
     let mut scenes = 0;
     let mut trials = 0;
     for shard in &shards {
-        for scene in shard.store.scenes()? {
+        let held = shard.store.scenes()?;
+        for &scene in &held {
             copy_dir(&shard.store.scene_dir(scene), &merged.scene_dir(scene))?;
-            scenes += 1;
-            trials += shard
-                .store
-                .load_scene(scene)?
-                .map_or(0, |record| record.trials.len());
         }
+        let tally = shard.store.tally(&held)?;
+        scenes += tally.scenes;
+        trials += tally.trials;
     }
     merged.save_manifest(&Manifest {
         schema: Manifest::SCHEMA.to_owned(),
@@ -398,7 +343,12 @@ fn read_shards(inputs: &[PathBuf]) -> anyhow::Result<Vec<ShardStore>> {
             );
         };
         let settings = &manifest.settings;
-        let scenes = settings["scenes"].as_u64().unwrap_or(0);
+        let scenes = settings["scenes"].as_u64().with_context(|| {
+            format!(
+                "{}: settings.scenes is not a number of scenes (recollect that shard with the same flags)",
+                store.manifest_path().display()
+            )
+        })?;
         let expected: Vec<u64> = (0..scenes).filter(|&s| shard.holds(s)).collect();
         let held = store.scenes()?;
         if held != expected {
@@ -427,22 +377,10 @@ fn read_shards(inputs: &[PathBuf]) -> anyhow::Result<Vec<ShardStore>> {
                     keys
                 );
             }
-            if first.shard.count != shard.count {
-                bail!(
-                    "{} is shard {shard}, and {} is shard {}: the shard counts differ; merge only the shards of one run",
-                    dir.display(),
-                    first.store.dir().display(),
-                    first.shard
-                );
-            }
         }
-        if let Some(twin) = shards.iter().find(|s| s.shard == shard) {
-            bail!(
-                "{} and {} both hold shard {shard}: the shards overlap; give each shard once",
-                twin.store.dir().display(),
-                dir.display()
-            );
-        }
+        let earlier: Vec<(Shard, &Path)> =
+            shards.iter().map(|s| (s.shard, s.store.dir())).collect();
+        shard::check_joins(shard, dir, &earlier, "run")?;
         shards.push(ShardStore {
             store,
             manifest,
@@ -455,18 +393,9 @@ fn read_shards(inputs: &[PathBuf]) -> anyhow::Result<Vec<ShardStore>> {
     Ok(shards)
 }
 
-/// "checkpoint, seed " — the top-level settings that differ, for the refusal.
+/// "checkpoint seed " — the top-level settings that differ, for the refusal.
 fn differing(a: &serde_json::Value, b: &serde_json::Value) -> String {
-    let (Some(a), Some(b)) = (a.as_object(), b.as_object()) else {
-        return String::new();
-    };
-    let mut keys: Vec<&String> = a
-        .keys()
-        .chain(b.keys())
-        .filter(|k| a.get(k.as_str()) != b.get(k.as_str()))
-        .collect();
-    keys.sort();
-    keys.dedup();
+    let keys = super::collect::differing_keys(a, b);
     keys.iter().map(|k| format!("{k} ")).collect()
 }
 

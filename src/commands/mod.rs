@@ -1,5 +1,6 @@
 //! Commands: each orchestrates the core, the objects and the simulator, and owns all printing.
 
+mod attempt;
 pub(crate) mod bench;
 pub(crate) mod collect;
 pub(crate) mod eval;
@@ -87,20 +88,35 @@ impl Context {
     }
 
     /// A progress bar with ETA over `len` `unit`s, `done` already: drawn on a terminal,
-    /// hidden under `--quiet`, in CI and when stderr is redirected.
+    /// hidden under `--quiet`, in CI and when stderr is redirected. The ETA is the pace of this
+    /// run's units (units resumed from an earlier run count as none), and reads `…` until the
+    /// first of them is done.
     pub(crate) fn progress_bar(&self, unit: &str, len: u64, done: u64) -> indicatif::ProgressBar {
-        use std::io::IsTerminal;
-        if self.quiet || !std::io::stderr().is_terminal() {
+        if !self.shows_progress() {
             return indicatif::ProgressBar::hidden();
         }
         let bar = indicatif::ProgressBar::new(len);
+        let estimate = move |state: &indicatif::ProgressState, w: &mut dyn std::fmt::Write| {
+            let _ = match state.pos() > done {
+                true => write!(w, "{:#}", indicatif::HumanDuration(state.eta())),
+                false => write!(w, "…"),
+            };
+        };
         bar.set_style(
             indicatif::ProgressStyle::with_template(&format!(
-                "{{bar:30}} {{pos}}/{{len}} {unit}  {{msg}}  [{{elapsed_precise}}, ETA {{eta}}]"
+                "{{bar:30}} {{pos}}/{{len}} {unit}  {{msg}}  [{{elapsed_precise}}, ETA {{estimate}}]"
             ))
-            .expect("the template is valid"),
+            .expect("the template is valid")
+            .with_key("estimate", estimate),
         );
         bar.set_position(done);
+        bar.reset_eta();
         bar
+    }
+
+    /// Whether progress is drawn: on a terminal, without `--quiet`.
+    pub(crate) fn shows_progress(&self) -> bool {
+        use std::io::IsTerminal;
+        !self.quiet && std::io::stderr().is_terminal()
     }
 }

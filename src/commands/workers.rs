@@ -103,21 +103,41 @@ mod tests {
 
     #[test]
     fn results_arrive_in_job_order_whichever_worker_finishes_first() {
-        let jobs: Vec<u64> = (0..12).collect();
+        // Each job waits until every later one has finished, so with a worker per job they
+        // finish last to first, whatever the scheduler does.
+        let jobs: Vec<u64> = (0..4).collect();
+        let finished = std::sync::Mutex::new(Vec::new());
+        let changed = std::sync::Condvar::new();
         let mut seen = Vec::new();
         run_in_order(
             &jobs,
-            3,
+            jobs.len(),
             || Ok(()),
             |_, &j| {
-                // Early jobs take longest, so later ones finish first.
-                std::thread::sleep(std::time::Duration::from_millis(2 * (12 - j)));
+                let mut done = finished.lock().unwrap();
+                while done.len() < jobs.len() - 1 - j as usize {
+                    let (next, timeout) = changed
+                        .wait_timeout(done, std::time::Duration::from_secs(30))
+                        .unwrap();
+                    assert!(
+                        !timeout.timed_out(),
+                        "job {j} waited 30 s for the later jobs"
+                    );
+                    done = next;
+                }
+                done.push(j);
+                changed.notify_all();
                 Ok(Some(j * 10))
             },
             |r| seen.push(r),
         )
         .unwrap();
-        assert_eq!(seen, (0..12).map(|j| j * 10).collect::<Vec<_>>());
+        assert_eq!(
+            *finished.lock().unwrap(),
+            [3, 2, 1, 0],
+            "they finished out of order"
+        );
+        assert_eq!(seen, [0, 10, 20, 30], "their results arrived in job order");
     }
 
     #[test]

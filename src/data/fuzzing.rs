@@ -3,18 +3,22 @@
 //! its safetensors, URDF, OBJ, STL, and PNG and JPEG observations), each fed to its parser in
 //! the test module beside it.
 //!
-//! Each input must end in a result or one error, never a panic, within 5 s, and the process
-//! must stay under 2 GiB resident. `GRASPMAP_FUZZ_CASES` sets the cases per parser (1000 by
-//! default, what CI runs); `scripts/fuzz.sh` runs the long pass.
+//! Each input must end in a result or one error, never a panic, within 5 s, and its parse
+//! must allocate under 2 GiB at any one time (counted by this test binary's allocator, for the
+//! parse's own thread: not the process's lifetime peak, which earlier tests and other threads
+//! would set). `GRASPMAP_FUZZ_CASES` sets the cases per parser (1000 by default, what CI
+//! runs); `scripts/fuzz.sh` runs the long pass.
 
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
 use std::time::{Duration, Instant};
 
 use proptest::prelude::*;
 
 /// Longest a single input may take.
 const MAX_CASE_TIME: Duration = Duration::from_secs(5);
-/// Most resident memory the process may reach.
-const MAX_RESIDENT_BYTES: i64 = 2 << 30;
+/// Most that one parse may hold allocated at once.
+const MAX_PARSE_BYTES: usize = 2 << 30;
 
 /// Cases per parser: `GRASPMAP_FUZZ_CASES`, or 1000.
 pub(crate) fn config() -> ProptestConfig {
@@ -104,31 +108,120 @@ pub(crate) fn edits() -> impl Strategy<Value = Vec<Edit>> {
     prop::collection::vec(any::<Edit>(), 1..6)
 }
 
-/// Runs one input through a parser, checking its time and the process's memory. The parser's
-/// result is dropped: a clear error is as good an outcome as a value.
+/// Runs one input through a parser, checking its time and the most it held allocated. The
+/// parser's result is dropped: a clear error is as good an outcome as a value.
 pub(crate) fn check<T, E>(parse: impl FnOnce() -> Result<T, E>) -> Result<(), TestCaseError> {
+    check_within(MAX_PARSE_BYTES, parse)
+}
+
+/// [`check`] with `limit` bytes for the parse.
+fn check_within<T, E>(
+    limit: usize,
+    parse: impl FnOnce() -> Result<T, E>,
+) -> Result<(), TestCaseError> {
     let start = Instant::now();
-    let _ = parse();
+    let (_, most) = peak_allocation(parse);
     let took = start.elapsed();
     prop_assert!(took < MAX_CASE_TIME, "one input took {took:?}");
     prop_assert!(
-        resident_peak() < MAX_RESIDENT_BYTES,
-        "resident peak {} bytes",
-        resident_peak()
+        most < limit,
+        "one input's parse held {most} bytes allocated"
     );
     Ok(())
 }
 
-/// The process's resident-set peak in bytes.
-fn resident_peak() -> i64 {
-    // SAFETY: getrusage only writes the struct it is given.
-    let mut usage: libc::rusage = unsafe { std::mem::zeroed() };
-    unsafe { libc::getrusage(libc::RUSAGE_SELF, &mut usage) };
-    usage.ru_maxrss * 1024
+/// Runs `f`: its result, and the most bytes it held allocated at once on this thread beyond
+/// what the thread held before (the parsers run on the caller's thread).
+fn peak_allocation<R>(f: impl FnOnce() -> R) -> (R, usize) {
+    let before = HELD.with(Cell::get);
+    PEAK.with(|peak| peak.set(before));
+    let result = f();
+    (result, PEAK.with(Cell::get) - before)
+}
+
+thread_local! {
+    /// Bytes allocated on this thread and not yet freed (frees on another thread not counted).
+    static HELD: Cell<usize> = const { Cell::new(0) };
+    /// The most `HELD` reached since [`peak_allocation`] reset it.
+    static PEAK: Cell<usize> = const { Cell::new(0) };
+}
+
+/// The test binary's allocator: the system's, counting each thread's allocation.
+struct Counting;
+
+#[global_allocator]
+static COUNTING: Counting = Counting;
+
+fn grew(bytes: usize) {
+    // `try_with`: a thread being torn down has no counters left, and its allocations go uncounted.
+    let _ = HELD.try_with(|held| {
+        let now = held.get() + bytes;
+        held.set(now);
+        let _ = PEAK.try_with(|peak| peak.set(peak.get().max(now)));
+    });
+}
+
+fn shrank(bytes: usize) {
+    let _ = HELD.try_with(|held| held.set(held.get().saturating_sub(bytes)));
+}
+
+// SAFETY: every call goes to the system allocator unchanged; the counting only reads sizes.
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        let p = unsafe { System.alloc_zeroed(layout) };
+        if !p.is_null() {
+            grew(layout.size());
+        }
+        p
+    }
+
+    unsafe fn dealloc(&self, p: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(p, layout) };
+        shrank(layout.size());
+    }
+
+    unsafe fn realloc(&self, p: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        let q = unsafe { System.realloc(p, layout, new_size) };
+        if !q.is_null() {
+            match new_size >= layout.size() {
+                true => grew(new_size - layout.size()),
+                false => shrank(layout.size() - new_size),
+            }
+        }
+        q
+    }
 }
 
 pub(crate) fn text(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes).into_owned()
+}
+
+#[test]
+fn the_memory_check_counts_the_parse_s_own_allocation() {
+    // Held before the parse, or by another thread meanwhile, is not the parse's.
+    use std::hint::black_box;
+    let kept = black_box(vec![1u8; 64 << 20]);
+    let other = std::thread::spawn(|| black_box(vec![1u8; 64 << 20]));
+    let (_, most) = peak_allocation(|| black_box(vec![0u8; 1 << 20]).len());
+    assert!((1 << 20..2 << 20).contains(&most), "{most}");
+    drop((kept, other.join().unwrap()));
+    // Freed before the parse ended still counts at its peak.
+    let (_, most) = peak_allocation(|| {
+        drop(black_box(vec![0u8; 8 << 20]));
+        black_box(vec![0u8; 1 << 20]).len()
+    });
+    assert!((8 << 20..9 << 20).contains(&most), "{most}");
+    let parse = |bytes: usize| move || Ok::<_, ()>(black_box(vec![0u8; bytes]).len());
+    assert!(check_within(4 << 20, parse(8 << 20)).is_err());
+    assert!(check_within(4 << 20, parse(1 << 20)).is_ok());
 }
 
 #[test]

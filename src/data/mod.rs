@@ -19,4 +19,5 @@ pub mod lock;
 pub(crate) mod observation;
 pub(crate) mod output;
 pub(crate) mod relabel;
+pub mod shard;
 pub mod trials;

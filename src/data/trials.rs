@@ -8,6 +8,7 @@
 //! killed run leaves whole attempts, and the next run redoes only the unfinished scenes (one per
 //! thread, each from its seed, to the same bytes). Shards hold disjoint scenes, so merging is copying folders.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context as _};
@@ -16,6 +17,7 @@ use serde::{Deserialize, Serialize};
 
 use super::atomic::{save_image_atomic, write_atomic};
 use super::input::{decode_depth_png, height_from_depth_mm, InputKind};
+use super::shard::Shard;
 use crate::grasp::{PixelGrasp, IMAGE_SIZE};
 
 /// The settings file's name.
@@ -23,56 +25,6 @@ pub(crate) const MANIFEST_FILE: &str = "collect.json";
 /// One scene's record, inside its folder.
 pub(crate) const SCENE_FILE: &str = "trials.json";
 const SCENE_PREFIX: &str = "scene_";
-
-/// Which part of the scenes a store holds: scene `s` belongs to shard `s mod count + 1`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct Shard {
-    /// 1-based shard number.
-    pub index: u32,
-    /// Shards in all.
-    pub count: u32,
-}
-
-impl Shard {
-    /// The whole run as one shard.
-    pub(crate) const WHOLE: Shard = Shard { index: 1, count: 1 };
-
-    /// Parses `I/N` with 1 ≤ I ≤ N.
-    pub(crate) fn parse(text: &str) -> Result<Self, String> {
-        let (i, n) = text
-            .split_once('/')
-            .ok_or_else(|| format!("'{text}' is not I/N (e.g. 2/4)"))?;
-        let number = |s: &str| {
-            s.trim()
-                .parse::<u32>()
-                .map_err(|_| format!("'{text}' is not I/N with whole numbers (e.g. 2/4)"))
-        };
-        let (index, count) = (number(i)?, number(n)?);
-        if count == 0 || index == 0 || index > count {
-            return Err(format!(
-                "'{text}': the shard number must lie in 1..={count} and the count be at least 1 (e.g. 2/4)"
-            ));
-        }
-        Ok(Self { index, count })
-    }
-
-    /// Whether scene `scene` (0-based) is this shard's.
-    pub(crate) fn holds(self, scene: u64) -> bool {
-        scene % u64::from(self.count) == u64::from(self.index - 1)
-    }
-
-    /// Whether this is the whole run.
-    pub(crate) fn is_whole(self) -> bool {
-        self.count == 1
-    }
-}
-
-impl std::fmt::Display for Shard {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(f, "{}/{}", self.index, self.count)
-    }
-}
 
 /// `collect.json`: what the store's scenes were collected with. Two stores merge, and a run
 /// resumes a store, only when their `settings` are equal.
@@ -138,6 +90,37 @@ pub struct SceneTrials {
     pub complete: bool,
     /// The attempts so far.
     pub trials: Vec<Trial>,
+}
+
+/// What some scenes of a store hold, counted.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct TrialTally {
+    /// Scenes counted.
+    pub(crate) scenes: usize,
+    /// Their attempts.
+    pub(crate) trials: usize,
+    /// Those that succeeded.
+    pub(crate) successes: usize,
+    /// Attempts and successes by who chose the grasp.
+    pub(crate) by_policy: BTreeMap<String, (usize, usize)>,
+}
+
+impl TrialTally {
+    /// The count of `records`.
+    pub(crate) fn of<'a>(records: impl IntoIterator<Item = &'a SceneTrials>) -> Self {
+        let mut tally = Self::default();
+        for record in records {
+            tally.scenes += 1;
+            for trial in &record.trials {
+                tally.trials += 1;
+                tally.successes += usize::from(trial.success);
+                let entry = tally.by_policy.entry(trial.policy.clone()).or_default();
+                entry.0 += 1;
+                entry.1 += usize::from(trial.success);
+            }
+        }
+        tally
+    }
 }
 
 /// A trial store's folder.
@@ -277,6 +260,19 @@ impl TrialStore {
             &self.scene_dir(record.scene).join(SCENE_FILE),
             text.as_bytes(),
         )
+    }
+
+    /// The trials of `scenes`, counted; a scene without its record is an error.
+    pub(crate) fn tally(&self, scenes: &[u64]) -> anyhow::Result<TrialTally> {
+        let mut records = Vec::with_capacity(scenes.len());
+        for &scene in scenes {
+            records.push(
+                self.load_scene(scene)?.with_context(|| {
+                    format!("scene {scene} vanished from {}", self.dir.display())
+                })?,
+            );
+        }
+        Ok(TrialTally::of(&records))
     }
 
     /// Removes a scene's folder (an unfinished scene that is redone from its seed).
@@ -432,19 +428,6 @@ mod tests {
     use super::*;
 
     #[test]
-    fn shards_split_the_scenes_disjointly_and_cover_them() {
-        let shards: Vec<Shard> = (1..=3).map(|i| Shard { index: i, count: 3 }).collect();
-        for scene in 0..30 {
-            assert_eq!(shards.iter().filter(|s| s.holds(scene)).count(), 1);
-        }
-        assert!(Shard::WHOLE.holds(17));
-        assert_eq!(Shard::parse("2/4"), Ok(Shard { index: 2, count: 4 }));
-        for bad in ["0/4", "5/4", "1/0", "x/2", "3", "-1/2"] {
-            assert!(Shard::parse(bad).is_err(), "{bad}");
-        }
-    }
-
-    #[test]
     fn a_scene_round_trips_through_its_folder() {
         let dir = tempfile::tempdir().unwrap();
         let store = TrialStore::new(dir.path().join("trials"));
@@ -482,6 +465,10 @@ mod tests {
         store.append(&record, &rgb, &depth).unwrap();
         assert_eq!(store.scenes().unwrap(), [4]);
         assert_eq!(store.load_scene(4).unwrap().unwrap(), record);
+        let tally = store.tally(&[4]).unwrap();
+        assert_eq!((tally.scenes, tally.trials, tally.successes), (1, 1, 0));
+        assert_eq!(tally.by_policy["explore"], (1, 0));
+        assert!(store.tally(&[4, 5]).is_err(), "scene 5 has no record");
         assert!(store.check().is_empty(), "{:?}", store.check());
         let loaded = store.load_all(InputKind::Rgbd).unwrap();
         assert_eq!(loaded.len(), 1);

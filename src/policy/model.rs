@@ -16,7 +16,7 @@ use crate::grasp::gripper::GRIPPER;
 use crate::grasp::tote::PICK_TOTE;
 use crate::grasp::PixelGrasp;
 use crate::model::inference::{AffordanceModel, Scored};
-use crate::model::maps::{visualisation, Choice};
+use crate::model::maps::{visualisation, AffordanceMaps, Choice};
 
 /// How the model policy checks the network's candidates (docs/evaluation.md).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -138,13 +138,7 @@ impl ModelPolicy {
         rng: &mut impl rand::Rng,
     ) -> Decision {
         let start = Instant::now();
-        let kind = self.model.input();
-        let depth = (kind == InputKind::Rgbd).then(|| view.frame.to_depth_image_mm());
-        let input = NetInput::new(kind, view.rgb.clone(), depth.as_ref());
-        let Scored { rotated, mut maps } = self
-            .model
-            .score(&input)
-            .expect("the policy builds the input its model was trained on");
+        let Scored { rotated, mut maps } = self.score(view);
         memory.apply(&mut maps);
         let choice = maps.sample(temperature, rng);
         Decision {
@@ -155,99 +149,145 @@ impl ModelPolicy {
             verified: None,
         }
     }
-}
 
-impl Policy for ModelPolicy {
-    fn decide(&self, view: &Observation, memory: &Suppression) -> Decision {
+    /// The network's 8 rotated maps of the view. The frame's depth goes through the 16-bit
+    /// millimetre image that `label` stores, as in training, so the height plane gets the same
+    /// rounding.
+    fn score(&self, view: &Observation) -> Scored {
+        let kind = self.model.input();
+        let depth = (kind == InputKind::Rgbd).then(|| view.frame.to_depth_image_mm());
+        let input = NetInput::new(kind, view.rgb.clone(), depth.as_ref());
+        self.model
+            .score(&input)
+            .expect("the policy builds the input its model was trained on")
+    }
+
+    /// The collision check: zeroes the grasps that would collide. Returns the maps as they
+    /// were before it when verification's second pass may look at them.
+    fn collision_check(
+        &self,
+        view: &Observation,
+        heights: &HeightMap,
+        gripper: &GripperVolume,
+        maps: &mut AffordanceMaps,
+    ) -> Option<AffordanceMaps> {
         let ModelPolicyConfig {
             check,
+            verify_top,
+            verify_rejected,
+            ..
+        } = self.config;
+        let second_pass = verify_top > 0 && verify_rejected > 0 && check != CollisionCheck::Off;
+        let unchecked = second_pass.then(|| maps.clone());
+        if check != CollisionCheck::Off {
+            let allowed =
+                allowed_actions(view.camera, view.frame, heights, &PICK_TOTE, gripper, check);
+            maps.restrict(&allowed);
+        }
+        unchecked
+    }
+
+    /// Verification: the best of the `verify_top` allowed candidates that passes the depth
+    /// image test, else of the `verify_rejected` best before the collision check (`unchecked`);
+    /// `None` when nothing passes.
+    ///
+    /// The network ranks, verification vetoes: in clutter its peak often sits on a box's edge
+    /// or corner, where the pads squeeze the box out, or across a side wider than the jaw
+    /// leaves room for. When none of the allowed best passes, it looks at the best that the
+    /// collision check zeroed: in clutter, a grasp that passes there works more often than the
+    /// allowed argmax that failed. When nothing passes (or nothing above the floor), the argmax
+    /// is still tried (BENCHMARKS.md#verification).
+    fn verify(
+        &self,
+        view: &Observation,
+        heights: &HeightMap,
+        maps: &AffordanceMaps,
+        unchecked: Option<&AffordanceMaps>,
+    ) -> Option<Choice> {
+        let ModelPolicyConfig {
             verify_top,
             verify_floor,
             verify_rejected,
             verify_strips,
             verify_square,
             verify_margin,
-            centring,
+            ..
         } = self.config;
-        let (camera, frame) = (view.camera, view.frame);
+        // Squeezed faces near square come first: a box squeezed 22.5° off its faces slips out
+        // of a cardboard grip (friction 0.3 holds up to about 17°), and the planner's 10 mm
+        // across a pad allows 24°.
+        let planner_slant = CheckConfig::default().max_slant;
+        let mut slants = vec![planner_slant];
+        if verify_square > 0.0 && verify_square < planner_slant {
+            slants.insert(0, verify_square);
+        }
+        // Each pass ranks the same maps: rank them once, the second pass's only if asked.
+        let ranked = maps.ranked(verify_top);
+        let ranked_unchecked = std::cell::OnceCell::new();
+        slants.into_iter().find_map(|max_slant| {
+            let config = CheckConfig {
+                strips: verify_strips,
+                max_slant,
+                squeeze_margin: verify_margin,
+                ..CheckConfig::default()
+            };
+            let verifier = Verifier::new(view.camera, view.frame, heights, config);
+            let passes = |g: PixelGrasp| verifier.assess(g).is_ok();
+            first_verified(ranked.clone(), verify_floor, passes).or_else(|| {
+                let unchecked = unchecked?;
+                let second = ranked_unchecked.get_or_init(|| unchecked.ranked(verify_rejected));
+                first_verified(second.clone(), verify_floor, passes)
+            })
+        })
+    }
+
+    /// Centring: the chosen grasp moved to the middle of its surface. A grasp that fits only at
+    /// a corner is still executed: refusing it and taking the next best did worse
+    /// (BENCHMARKS.md#centring).
+    fn centre(
+        view: &Observation,
+        heights: &HeightMap,
+        gripper: &GripperVolume,
+        maps: &AffordanceMaps,
+        choice: Choice,
+    ) -> Choice {
+        let site = GraspSite {
+            camera: view.camera,
+            frame: view.frame,
+            heights,
+            tote: &PICK_TOTE,
+            gripper,
+        };
+        let refined = site.refine(choice.grasp, |g| maps.score_at(g));
+        match refined.filter(|&g| g != choice.grasp) {
+            Some(grasp) => maps.choice_of(grasp),
+            None => choice,
+        }
+    }
+}
+
+impl Policy for ModelPolicy {
+    /// Score → suppression → collision check → argmax → verification → centring.
+    fn decide(&self, view: &Observation, memory: &Suppression) -> Decision {
         let start = Instant::now();
-        // The same conversion as training: the frame's depth goes through the 16-bit millimetre
-        // image that `label` stores, so the height plane gets the same rounding.
-        let kind = self.model.input();
-        let depth = (kind == InputKind::Rgbd).then(|| frame.to_depth_image_mm());
-        let input = NetInput::new(kind, view.rgb.clone(), depth.as_ref());
-        let Scored { rotated, mut maps } = self
-            .model
-            .score(&input)
-            .expect("the policy builds the input its model was trained on");
-        let gripper = GripperVolume::from(&GRIPPER);
+        let Scored { rotated, mut maps } = self.score(view);
         // One back-projection of the frame serves the collision check, verification and
         // centring.
-        let heights = HeightMap::new(camera, frame);
+        let heights = HeightMap::new(view.camera, view.frame);
+        let gripper = GripperVolume::from(&GRIPPER);
         // Suppression only lowers and clips to [0, 1], so it gives the same maps before the
         // collision check's zeroing as after; applied first, the second pass's copy shares it.
         memory.apply(&mut maps);
-        let second_pass = verify_top > 0 && verify_rejected > 0 && check != CollisionCheck::Off;
-        let unchecked = second_pass.then(|| maps.clone());
-        if check != CollisionCheck::Off {
-            let allowed = allowed_actions(camera, frame, &heights, &PICK_TOTE, &gripper, check);
-            maps.restrict(&allowed);
-        }
+        let unchecked = self.collision_check(view, &heights, &gripper, &mut maps);
         let mut choice = maps.choose();
         let mut verified = None;
-        if verify_top > 0 {
-            // The network ranks, verification vetoes: in clutter its peak often sits on a
-            // box's edge or corner, where the pads squeeze the box out, or across a side wider
-            // than the jaw leaves room for. When none of the allowed best passes, it looks at
-            // the best that the collision check zeroed: in clutter, a grasp that passes there
-            // works more often than the allowed argmax that failed. When nothing passes (or
-            // nothing above the floor), the argmax is still tried
-            // (BENCHMARKS.md#verification).
-            // Squeezed faces near square come first: a box squeezed 22.5° off its faces slips
-            // out of a cardboard grip (friction 0.3 holds up to about 17°), and the planner's
-            // 10 mm across a pad allows 24°.
-            let planner_slant = CheckConfig::default().max_slant;
-            let mut slants = vec![planner_slant];
-            if verify_square > 0.0 && verify_square < planner_slant {
-                slants.insert(0, verify_square);
-            }
-            // Each pass ranks the same maps: rank them once, the second pass's only if asked.
-            let ranked = maps.ranked(verify_top);
-            let ranked_unchecked = std::cell::OnceCell::new();
-            let passed = slants.into_iter().find_map(|max_slant| {
-                let config = CheckConfig {
-                    strips: verify_strips,
-                    max_slant,
-                    squeeze_margin: verify_margin,
-                    ..CheckConfig::default()
-                };
-                let verifier = Verifier::new(camera, frame, &heights, config);
-                let passes = |g: PixelGrasp| verifier.assess(g).is_ok();
-                first_verified(ranked.clone(), verify_floor, passes).or_else(|| {
-                    let unchecked = unchecked.as_ref()?;
-                    let second = ranked_unchecked.get_or_init(|| unchecked.ranked(verify_rejected));
-                    first_verified(second.clone(), verify_floor, passes)
-                })
-            });
+        if self.config.verify_top > 0 {
+            let passed = self.verify(view, &heights, &maps, unchecked.as_ref());
             verified = Some(passed.is_some());
-            if let Some(passed) = passed {
-                choice = passed;
-            }
+            choice = passed.unwrap_or(choice);
         }
-        if centring {
-            // A grasp that fits only at a corner is still executed: refusing it and taking
-            // the next best did worse (BENCHMARKS.md#centring).
-            let site = GraspSite {
-                camera,
-                frame,
-                heights: &heights,
-                tote: &PICK_TOTE,
-                gripper: &gripper,
-            };
-            let refined = site.refine(choice.grasp, |g| maps.score_at(g));
-            if let Some(grasp) = refined.filter(|&g| g != choice.grasp) {
-                choice = maps.choice_of(grasp);
-            }
+        if self.config.centring {
+            choice = Self::centre(view, &heights, &gripper, &maps, choice);
         }
         let network_seconds = start.elapsed().as_secs_f64();
         Decision {

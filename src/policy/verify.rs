@@ -294,67 +294,18 @@ pub(crate) fn check_grasp(
 ) -> Result<Assessment, Rejection> {
     let target = world_grasp(camera, frame, grasp);
     let tcp = target.tcp;
-    let along = target.closing;
-    let across = Vector::new(-along.y, along.x, 0.0);
-    let half_open = config.opening / 2.0;
-    let limit = half_open - config.squeeze_margin;
-    let pad_outer = half_open + config.pad_thickness + config.margin;
-    let pad_half_width = config.pad_width / 2.0 + config.margin;
-
-    let mut lo = f32::MAX;
-    let mut hi = f32::MIN;
-    let mut covered = [false; 3];
-    let mut side_lo = [f32::MAX; 2];
-    let mut side_hi = [f32::MIN; 2];
-    let mut clearance = CLEARANCE_CAP;
-    let palm_half = [
-        config.palm_half_along + config.margin,
-        config.palm_half_across + config.margin,
-    ];
-    let reach = pad_outer.max(palm_half[0]) + pad_half_width.max(palm_half[1]);
-    for p in cloud.near(tcp, reach) {
-        let d = p - tcp;
-        let s = d.dot(along);
-        let signed_w = d.dot(across);
-        let w = signed_w.abs();
-        if s.abs() <= palm_half[0]
-            && w <= palm_half[1]
-            && p.z >= tcp.z + config.palm_height - config.margin
-        {
-            return Err(Rejection::Palm);
-        }
-        if w > pad_half_width || s.abs() > pad_outer {
-            continue;
-        }
-        // The margin beside a pad's inner corner belongs to the pad: the corner comes down
-        // there, and a flank rising into it stopped the arm at 204 N on a mesh mustard bottle.
-        let beside_inner_corner = s.abs() > limit && w > config.pad_width / 2.0;
-        if s.abs() >= half_open || beside_inner_corner {
-            // Under a pad: the surface must be below the pad's lower edge.
-            if p.z >= tcp.z {
-                return Err(Rejection::PadBlocked);
-            }
-            clearance = clearance.min(tcp.z - p.z);
-        } else if w <= config.pad_width / 2.0 && p.z > tcp.z + SQUEEZE_LEVEL {
-            // Between the pads at pad height: part of what will be squeezed.
-            if s.abs() > limit {
-                return Err(Rejection::TooWide);
-            }
-            lo = lo.min(s);
-            hi = hi.max(s);
-            let half = usize::from(signed_w > 0.0);
-            side_lo[half] = side_lo[half].min(s);
-            side_hi[half] = side_hi[half].max(s);
-            // Which halves of the pads' width the squeezed part covers.
-            if signed_w < -config.pad_width / 4.0 {
-                covered[0] = true;
-            } else if signed_w > config.pad_width / 4.0 {
-                covered[1] = true;
-            } else {
-                covered[2] = true;
-            }
-        }
+    let jaw = Jaw::of(target.closing, config);
+    let mut squeezed = Squeezed::new();
+    for p in cloud.near(tcp, jaw.reach) {
+        squeezed.add(&jaw, p, tcp, config)?;
     }
+    let Squeezed {
+        lo,
+        hi,
+        covered,
+        clearance,
+        ..
+    } = squeezed;
     if lo > hi {
         return Err(Rejection::NothingBetweenPads);
     }
@@ -365,15 +316,7 @@ pub(crate) fn check_grasp(
     if !pads_in_view(camera, frame, &target, config) {
         return Err(Rejection::PadHidden);
     }
-    // Where the squeezed outline differs between the two halves of a pad, the surface is
-    // slanted to the jaw and a squeeze pushes the object out sideways.
-    let slant = if side_lo[0] <= side_hi[0] && side_lo[1] <= side_hi[1] {
-        (side_lo[0] - side_lo[1])
-            .abs()
-            .max((side_hi[0] - side_hi[1]).abs())
-    } else {
-        config.pad_width
-    };
+    let slant = squeezed.slant(config);
     if slant > config.max_slant {
         return Err(Rejection::Slanted);
     }
@@ -385,6 +328,132 @@ pub(crate) fn check_grasp(
         asymmetry: (lo + hi).abs() / 2.0,
         width: hi - lo,
     })
+}
+
+/// The open jaw of one grasp in the plane: its closing axis, the axis across it, and the
+/// extents that [`Squeezed::add`] sorts the points by.
+struct Jaw {
+    along: Vector,
+    across: Vector,
+    half_open: f32,
+    /// How far apart the squeezed part may reach, each side of the centre.
+    limit: f32,
+    pad_outer: f32,
+    pad_half_width: f32,
+    palm_half: [f32; 2],
+    /// The radius around the tool centre point that holds every point the checks look at.
+    reach: f32,
+}
+
+impl Jaw {
+    fn of(along: Vector, config: &CheckConfig) -> Self {
+        let half_open = config.opening / 2.0;
+        let pad_outer = half_open + config.pad_thickness + config.margin;
+        let pad_half_width = config.pad_width / 2.0 + config.margin;
+        let palm_half = [
+            config.palm_half_along + config.margin,
+            config.palm_half_across + config.margin,
+        ];
+        Self {
+            along,
+            across: Vector::new(-along.y, along.x, 0.0),
+            half_open,
+            limit: half_open - config.squeeze_margin,
+            pad_outer,
+            pad_half_width,
+            palm_half,
+            reach: pad_outer.max(palm_half[0]) + pad_half_width.max(palm_half[1]),
+        }
+    }
+}
+
+/// What the points near a grasp say so far: the extent of the squeezed part along the jaw
+/// (overall and per half of the pads' width), which strips of the pads it covers, and the
+/// clearance under the pads.
+struct Squeezed {
+    lo: f32,
+    hi: f32,
+    covered: [bool; 3],
+    side_lo: [f32; 2],
+    side_hi: [f32; 2],
+    clearance: f32,
+}
+
+impl Squeezed {
+    fn new() -> Self {
+        Self {
+            lo: f32::MAX,
+            hi: f32::MIN,
+            covered: [false; 3],
+            side_lo: [f32::MAX; 2],
+            side_hi: [f32::MIN; 2],
+            clearance: CLEARANCE_CAP,
+        }
+    }
+
+    /// Adds the point `p` of the cloud near the tool centre point `tcp`, or the check it
+    /// fails.
+    fn add(
+        &mut self,
+        jaw: &Jaw,
+        p: Vector,
+        tcp: Vector,
+        config: &CheckConfig,
+    ) -> Result<(), Rejection> {
+        let d = p - tcp;
+        let s = d.dot(jaw.along);
+        let signed_w = d.dot(jaw.across);
+        let w = signed_w.abs();
+        if s.abs() <= jaw.palm_half[0]
+            && w <= jaw.palm_half[1]
+            && p.z >= tcp.z + config.palm_height - config.margin
+        {
+            return Err(Rejection::Palm);
+        }
+        if w > jaw.pad_half_width || s.abs() > jaw.pad_outer {
+            return Ok(());
+        }
+        // The margin beside a pad's inner corner belongs to the pad: the corner comes down
+        // there, and a flank rising into it stopped the arm at 204 N on a mesh mustard bottle.
+        let beside_inner_corner = s.abs() > jaw.limit && w > config.pad_width / 2.0;
+        if s.abs() >= jaw.half_open || beside_inner_corner {
+            // Under a pad: the surface must be below the pad's lower edge.
+            if p.z >= tcp.z {
+                return Err(Rejection::PadBlocked);
+            }
+            self.clearance = self.clearance.min(tcp.z - p.z);
+        } else if w <= config.pad_width / 2.0 && p.z > tcp.z + SQUEEZE_LEVEL {
+            // Between the pads at pad height: part of what will be squeezed.
+            if s.abs() > jaw.limit {
+                return Err(Rejection::TooWide);
+            }
+            self.lo = self.lo.min(s);
+            self.hi = self.hi.max(s);
+            let half = usize::from(signed_w > 0.0);
+            self.side_lo[half] = self.side_lo[half].min(s);
+            self.side_hi[half] = self.side_hi[half].max(s);
+            // Which halves of the pads' width the squeezed part covers.
+            if signed_w < -config.pad_width / 4.0 {
+                self.covered[0] = true;
+            } else if signed_w > config.pad_width / 4.0 {
+                self.covered[1] = true;
+            } else {
+                self.covered[2] = true;
+            }
+        }
+        Ok(())
+    }
+
+    /// Where the squeezed outline differs between the two halves of a pad, the surface is
+    /// slanted to the jaw and a squeeze pushes the object out sideways.
+    fn slant(&self, config: &CheckConfig) -> f32 {
+        let (lo, hi) = (self.side_lo, self.side_hi);
+        if lo[0] <= hi[0] && lo[1] <= hi[1] {
+            (lo[0] - lo[1]).abs().max((hi[0] - hi[1]).abs())
+        } else {
+            config.pad_width
+        }
+    }
 }
 
 #[cfg(test)]

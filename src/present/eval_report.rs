@@ -2,7 +2,12 @@
 //! intervals and timings, as JSON (`graspmap.eval/2`) and as printed lines.
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+
+use anyhow::Context as _;
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use serde_json::Value;
 
 use crate::grasp::PixelGrasp;
 use crate::metrics::{median, FailureTally, Rate, Spread};
@@ -157,6 +162,131 @@ pub(crate) struct EvalResults {
     pub(crate) vis_dir: Option<PathBuf>,
 }
 
+/// The schema `eval` writes and its readers accept.
+pub(crate) const EVAL_SCHEMA: &str = "graspmap.eval/2";
+
+/// An eval report as `merge`, `eval --resume` and `improve` read it back: the envelope's
+/// commit, the settings they compare, and the results, in the types `eval` writes them with.
+/// [`EvalReport::read`] fills nothing in: another schema, or a field missing or of another
+/// type, is an error that names the file.
+#[derive(Debug, Clone)]
+pub(crate) struct EvalReport {
+    /// Where it was read from.
+    pub(crate) path: PathBuf,
+    /// The commit of the binary that wrote it.
+    pub(crate) git_commit: String,
+    /// The settings of its `config` that readers use.
+    pub(crate) config: EvalSettings,
+    /// Its whole `config`, as written.
+    pub(crate) config_value: Value,
+    /// What the evaluation found.
+    pub(crate) results: EvalResults,
+}
+
+/// The settings of an eval report's `config` that its readers use (`resolved_config` in
+/// commands/eval/sweep.rs writes them, among others).
+#[derive(Debug, Clone, Serialize, serde::Deserialize)]
+pub(crate) struct EvalSettings {
+    /// train, test or empty_bin.
+    pub(crate) task: Task,
+    /// model, random or oracle.
+    pub(crate) policy: PolicyKind,
+    /// The whole sweep's seeds (a shard's are in `results.seeds`).
+    pub(crate) seeds: Vec<u64>,
+    /// The objects evaluated.
+    pub(crate) objects: Vec<String>,
+    /// The global flags.
+    pub(crate) global: GlobalSettings,
+    /// Failure suppression.
+    pub(crate) suppression: SuppressionSettings,
+    /// The model's checkpoint by content (model policy only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) checkpoint_sha256: Option<String>,
+    /// `I/N` for a shard of the sweep; absent for the whole sweep.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) shard: Option<String>,
+}
+
+/// The global flags of an eval report's `config` that its readers use.
+#[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
+pub(crate) struct GlobalSettings {
+    /// Where the object models came from.
+    pub(crate) objects_dir: PathBuf,
+}
+
+/// Failure suppression in an eval report's `config`, as far as its readers use it.
+#[derive(Debug, Clone, Copy, Serialize, serde::Deserialize)]
+pub(crate) struct SuppressionSettings {
+    /// Actions remembered (`--n-past-action`).
+    pub(crate) remember: usize,
+}
+
+/// The parts of the envelope that [`EvalReport`] keeps.
+#[derive(Serialize, serde::Deserialize)]
+struct Envelope {
+    git_commit: String,
+    config: EvalSettings,
+    results: EvalResults,
+}
+
+impl EvalReport {
+    /// Reads the eval report at `path`; each refusal names the file and ends with `fix`.
+    pub(crate) fn read(path: &Path, fix: &str) -> anyhow::Result<Self> {
+        let text =
+            std::fs::read_to_string(path).with_context(|| format!("reading {}", path.display()))?;
+        let refuse = |why: String| {
+            anyhow::anyhow!(
+                "{} is not a graspmap eval report ({why}; {fix})",
+                path.display()
+            )
+        };
+        let value: Value = serde_json::from_str(&text)
+            .map_err(|_| refuse("it does not parse as JSON".to_owned()))?;
+        if value["schema"] != EVAL_SCHEMA {
+            let schema = &value["schema"];
+            return Err(refuse(format!("schema {schema}, expected {EVAL_SCHEMA}")));
+        }
+        let envelope: Envelope = strict(&value).map_err(refuse)?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            git_commit: envelope.git_commit,
+            config: envelope.config,
+            config_value: value["config"].clone(),
+            results: envelope.results,
+        })
+    }
+}
+
+/// `value` as a `T`, with no field filled in by a default: serialised again, every field it
+/// writes must have been in `value` (fields written only when set may be absent).
+fn strict<T: DeserializeOwned + Serialize>(value: &Value) -> Result<T, String> {
+    let typed: T = serde_json::from_value(value.clone()).map_err(|e| e.to_string())?;
+    let written = serde_json::to_value(&typed).map_err(|e| e.to_string())?;
+    match defaulted_field(value, &written, "") {
+        Some(field) => Err(format!("missing field `{field}`")),
+        None => Ok(typed),
+    }
+}
+
+/// The first field of `written` that `read` lacks, as a path (`results.runs[0].bin.gave_up`).
+fn defaulted_field(read: &Value, written: &Value, at: &str) -> Option<String> {
+    match (read, written) {
+        (Value::Object(read), Value::Object(written)) => written.iter().find_map(|(key, w)| {
+            let path = match at {
+                "" => key.clone(),
+                _ => format!("{at}.{key}"),
+            };
+            match read.get(key) {
+                None => Some(path),
+                Some(r) => defaulted_field(r, w, &path),
+            }
+        }),
+        (Value::Array(read), Value::Array(written)) => (read.iter().zip(written).enumerate())
+            .find_map(|(i, (r, w))| defaulted_field(r, w, &format!("{at}[{i}]"))),
+        _ => None,
+    }
+}
+
 /// The report of a whole evaluation from its scenes.
 pub(crate) fn summarise(
     task: Task,
@@ -260,7 +390,6 @@ fn failure_tally<'a>(attempts: impl IntoIterator<Item = &'a AttemptRecord>) -> F
 
 /// The human-readable report: a table, the overall rate, and where the time went.
 pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<String> {
-    let mut lines = Vec::new();
     let seeds = results
         .seeds
         .iter()
@@ -274,67 +403,87 @@ pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
     };
     let policy = results.policy.name();
     let task = results.task.name();
-    lines.push(format!(
+    let mut lines = vec![format!(
         "eval --task {task}, policy {policy}, seed {seeds}{suppression}"
-    ));
+    )];
     if results.task == Task::EmptyBin {
-        lines.push(format!(
-            "{:>6} {:>8} {:>9} {:>6} {:>5} {:>5}  failures",
-            "seed", "attempts", "successes", "moved", "left", "lost"
-        ));
-        for run in &results.runs {
-            let Some(bin) = &run.bin else { continue };
-            lines.push(format!(
-                "{:>6} {:>8} {:>9} {:>6} {:>5} {:>5}  {}",
-                run.seed,
-                run.attempts.len(),
-                run.attempts.iter().filter(|a| a.success).count(),
-                bin.moved,
-                bin.left,
-                bin.lost,
-                failure_tally(&run.attempts).describe()
-            ));
-        }
-        if let (Some(moved), Some(lost)) = (&results.moved, &results.lost) {
-            let total = results.runs[0]
-                .bin
-                .as_ref()
-                .map_or(0, |b| b.locations.len());
-            lines.push(format!(
-                "objects moved: {:.1} ± {:.1} of {total} (min {}, max {}, over {} scene{}); lost {:.1}",
-                moved.mean,
-                moved.std,
-                moved.min,
-                moved.max,
-                moved.count,
-                if moved.count == 1 { "" } else { "s" },
-                lost.mean
-            ));
-        }
-        lines.push(format!("pick success: {}", results.success.describe()));
+        lines.extend(scene_table(results));
     } else {
-        let width = results
-            .per_object
-            .iter()
-            .map(|o| o.object.len())
-            .max()
-            .unwrap_or(6)
-            .max(6);
-        lines.push(format!(
-            "{:<width$} {:>8} {:>9}  failures",
-            "object", "attempts", "successes"
-        ));
-        for o in &results.per_object {
-            lines.push(format!(
-                "{:<width$} {:>8} {:>9}  {}",
-                o.object,
-                o.attempts,
-                o.successes,
-                o.failures.describe()
-            ));
-        }
-        lines.push(format!("success rate: {}", results.success.describe()));
+        lines.extend(object_table(results));
     }
+    lines.extend(unverified_lines(results));
+    lines.push(timing_line(&results.timing));
+    lines
+}
+
+/// empty_bin: a line per scene, the objects moved over the scenes and the pick success.
+fn scene_table(results: &EvalResults) -> Vec<String> {
+    let mut lines = vec![format!(
+        "{:>6} {:>8} {:>9} {:>6} {:>5} {:>5}  failures",
+        "seed", "attempts", "successes", "moved", "left", "lost"
+    )];
+    for run in &results.runs {
+        let Some(bin) = &run.bin else { continue };
+        lines.push(format!(
+            "{:>6} {:>8} {:>9} {:>6} {:>5} {:>5}  {}",
+            run.seed,
+            run.attempts.len(),
+            run.attempts.iter().filter(|a| a.success).count(),
+            bin.moved,
+            bin.left,
+            bin.lost,
+            failure_tally(&run.attempts).describe()
+        ));
+    }
+    if let (Some(moved), Some(lost)) = (&results.moved, &results.lost) {
+        let total = results.runs[0]
+            .bin
+            .as_ref()
+            .map_or(0, |b| b.locations.len());
+        lines.push(format!(
+            "objects moved: {:.1} ± {:.1} of {total} (min {}, max {}, over {} scene{}); lost {:.1}",
+            moved.mean,
+            moved.std,
+            moved.min,
+            moved.max,
+            moved.count,
+            if moved.count == 1 { "" } else { "s" },
+            lost.mean
+        ));
+    }
+    lines.push(format!("pick success: {}", results.success.describe()));
+    lines
+}
+
+/// train/test: a line per object and the success rate.
+fn object_table(results: &EvalResults) -> Vec<String> {
+    let width = results
+        .per_object
+        .iter()
+        .map(|o| o.object.len())
+        .max()
+        .unwrap_or(6)
+        .max(6);
+    let mut lines = vec![format!(
+        "{:<width$} {:>8} {:>9}  failures",
+        "object", "attempts", "successes"
+    )];
+    for o in &results.per_object {
+        lines.push(format!(
+            "{:<width$} {:>8} {:>9}  {}",
+            o.object,
+            o.attempts,
+            o.successes,
+            o.failures.describe()
+        ));
+    }
+    lines.push(format!("success rate: {}", results.success.describe()));
+    lines
+}
+
+/// The attempts that executed a grasp (or a push) nothing verified, when there were any.
+fn unverified_lines(results: &EvalResults) -> Vec<String> {
+    let mut lines = Vec::new();
     let (pushed, unverified): (Vec<&AttemptRecord>, Vec<&AttemptRecord>) = results
         .runs
         .iter()
@@ -355,8 +504,12 @@ pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
             counted(pushed.len(), "attempt"),
         ));
     }
-    let t = &results.timing;
-    lines.push(format!(
+    lines
+}
+
+/// Where the time of an attempt went.
+fn timing_line(t: &TimingSummary) -> String {
+    format!(
         "per attempt: {:.2} s wall (median {:.2}) = sim {:.2} + render {:.3} + network {:.3} + other {:.3}; total {:.1} s{}",
         t.mean.wall,
         t.median_wall,
@@ -372,8 +525,7 @@ pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
                 t.total_wall / t.attempts.max(1) as f64
             ),
         }
-    ));
-    lines
+    )
 }
 
 /// Mean per-attempt time.
@@ -395,4 +547,167 @@ pub(crate) struct TimingSummary {
 
 fn one_worker() -> usize {
     1
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A one-attempt empty_bin report as `eval` writes it.
+    fn written(dir: &Path) -> PathBuf {
+        let attempt = AttemptRecord {
+            drop_seed: 2,
+            attempt: 0,
+            object: None,
+            grasp: None,
+            choice: None,
+            verified: None,
+            success: false,
+            reason: PickReason::Ungraspable,
+            detail: "nothing".to_owned(),
+            aimed_at: None,
+            held: None,
+            placed: None,
+            moved: Some(0),
+            vis: None,
+            timing: AttemptTiming::default(),
+            violations: Vec::new(),
+        };
+        let run = SceneRun {
+            seed: 2,
+            attempts: vec![attempt],
+            bin: Some(BinOutcome {
+                moved: 0,
+                left: 1,
+                lost: 0,
+                locations: BTreeMap::new(),
+                gave_up: false,
+            }),
+        };
+        let names = ["YcbBanana".to_owned()];
+        let results = summarise(
+            Task::EmptyBin,
+            PolicyKind::Random,
+            vec![2],
+            &names,
+            vec![run],
+            1.5,
+            false,
+        );
+        let config = serde_json::json!({
+            "global": {"objects_dir": "bundled:objects", "threads": 1},
+            "task": "empty_bin",
+            "policy": "random",
+            "seeds": [2],
+            "objects": names,
+            "suppression": {"remember": 0, "sigma_px": 4.0},
+        });
+        let path = dir.join("eval.json");
+        crate::present::envelope::write_versioned_report(&path, "eval", 2, 2, &config, &results)
+            .unwrap();
+        path
+    }
+
+    /// The report at `path` with `edit` applied to its JSON.
+    fn edited(path: &Path, edit: impl FnOnce(&mut Value)) {
+        let mut value: Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+        edit(&mut value);
+        std::fs::write(path, serde_json::to_vec(&value).unwrap()).unwrap();
+    }
+
+    #[test]
+    fn a_written_report_reads_back_in_its_own_types() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = written(dir.path());
+        let report = EvalReport::read(&path, "fix it").unwrap();
+        assert_eq!(report.config.task, Task::EmptyBin);
+        assert_eq!(report.config.seeds, [2]);
+        assert_eq!(report.config.suppression.remember, 0);
+        assert_eq!(report.config.shard, None);
+        assert_eq!(report.results.timing.total_wall, 1.5);
+        assert_eq!(report.results.runs[0].bin.as_ref().unwrap().left, 1);
+        assert_eq!(report.config_value["global"]["threads"], 1);
+    }
+
+    #[test]
+    fn a_missing_field_is_refused_with_the_file_and_the_field_not_filled_in() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = written(dir.path());
+        // Fields that the types default when absent (a version-1 report's) count as missing.
+        for (field, remove) in [
+            (
+                "results.timing.workers",
+                (|v: &mut Value| {
+                    v["results"]["timing"]
+                        .as_object_mut()
+                        .unwrap()
+                        .remove("workers")
+                }) as fn(&mut Value) -> Option<Value>,
+            ),
+            ("results.runs[0].bin.gave_up", |v| {
+                v["results"]["runs"][0]["bin"]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("gave_up")
+            }),
+            ("results.vis_dir", |v| {
+                v["results"].as_object_mut().unwrap().remove("vis_dir")
+            }),
+            ("total_wall", |v| {
+                v["results"]["timing"]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("total_wall")
+            }),
+            ("remember", |v| {
+                v["config"]["suppression"]
+                    .as_object_mut()
+                    .unwrap()
+                    .remove("remember")
+            }),
+        ] {
+            let copy = dir.path().join("copy.json");
+            std::fs::copy(&path, &copy).unwrap();
+            edited(&copy, |v| {
+                remove(v).unwrap();
+            });
+            let error = EvalReport::read(&copy, "fix it").unwrap_err().to_string();
+            assert!(
+                error.starts_with(&format!(
+                    "{} is not a graspmap eval report (",
+                    copy.display()
+                )) && error.contains(&format!("`{field}`"))
+                    && error.ends_with("; fix it)"),
+                "{field}: {error}"
+            );
+        }
+        // Fields written only when set may be absent.
+        edited(&path, |v| {
+            v["results"]["runs"][0]["attempts"][0]
+                .as_object_mut()
+                .unwrap()
+                .remove("violations");
+        });
+        assert!(EvalReport::read(&path, "fix it").is_ok());
+    }
+
+    #[test]
+    fn another_schema_or_no_json_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = written(dir.path());
+        edited(&path, |v| v["schema"] = Value::from("graspmap.eval/1"));
+        let error = EvalReport::read(&path, "fix it").unwrap_err().to_string();
+        assert!(
+            error.ends_with(
+                "is not a graspmap eval report (schema \"graspmap.eval/1\", expected graspmap.eval/2; fix it)"
+            ),
+            "{error}"
+        );
+        std::fs::write(&path, "{").unwrap();
+        let error = EvalReport::read(&path, "fix it").unwrap_err().to_string();
+        assert!(
+            error.contains("(it does not parse as JSON; fix it)"),
+            "{error}"
+        );
+    }
 }

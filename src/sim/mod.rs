@@ -431,72 +431,15 @@ pub fn oblique_camera() -> Camera {
 /// The fixed scenery (ground, both totes, the pedestal): its drawables, and the environment's
 /// colliders that the arm must not touch.
 fn build_scenery(world: &mut PhysicsWorld) -> (Vec<Drawable>, Vec<ColliderHandle>) {
-    let mut scenery = Vec::new();
-    let mut environment = Vec::new();
-    let ground_color = [0.55, 0.55, 0.52];
-    let tote_color = [0.38, 0.39, 0.41];
-    let mut add_fixed_box = |world: &mut PhysicsWorld,
-                             scenery: &mut Vec<Drawable>,
-                             center: Vector,
-                             half: Vector,
-                             color: [f32; 3]| {
-        let handle = world.insert_collider(
-            ColliderBuilder::cuboid(half.x, half.y, half.z)
-                .translation(center)
-                .friction(ENVIRONMENT_FRICTION)
-                .friction_combine_rule(CoefficientCombineRule::Multiply)
-                .collision_groups(groups::environment())
-                // Its contacts are screened for the narrow phase's misfires (depth.rs); a
-                // hooked pair is never recycled, so its contacts are fresh every step.
-                .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
-            None,
-        );
-        environment.push(handle);
-        scenery.push(Drawable {
-            shape: Shape::Cuboid { half_extents: half },
-            pose: Pose::from_translation(center),
-            color,
-            id: 0,
-        });
-    };
-    add_fixed_box(
+    let mut scenery = Scenery::default();
+    scenery.add_fixed_box(
         world,
-        &mut scenery,
         Vector::new(0.0, 0.0, -0.05),
         Vector::new(2.0, 2.0, 0.05),
-        ground_color,
+        [0.55, 0.55, 0.52],
     );
     for tote in [PICK_TOTE, PLACE_TOTE] {
-        let center = Vector::new(tote.center[0], tote.center[1], 0.0);
-        let [hx, hy] = tote.inner_half;
-        let t = tote::WALL_THICKNESS;
-        add_fixed_box(
-            world,
-            &mut scenery,
-            Vector::new(center.x, center.y, tote.floor_top / 2.0),
-            Vector::new(hx + t, hy + t, tote.floor_top / 2.0),
-            tote_color,
-        );
-        let wall_half_z = (tote.wall_top - tote.floor_top) / 2.0;
-        let wall_z = tote.floor_top + wall_half_z;
-        for sx in [-1.0, 1.0] {
-            add_fixed_box(
-                world,
-                &mut scenery,
-                Vector::new(center.x + sx * (hx + t / 2.0), center.y, wall_z),
-                Vector::new(t / 2.0, hy + t, wall_half_z),
-                tote_color,
-            );
-        }
-        for sy in [-1.0, 1.0] {
-            add_fixed_box(
-                world,
-                &mut scenery,
-                Vector::new(center.x, center.y + sy * (hy + t / 2.0), wall_z),
-                Vector::new(hx, t / 2.0, wall_half_z),
-                tote_color,
-            );
-        }
+        scenery.add_tote(world, &tote);
     }
     let pedestal_pose = Pose::from_parts(
         Vector::new(0.0, 0.0, ROBOT_BASE.z / 2.0),
@@ -508,7 +451,7 @@ fn build_scenery(world: &mut PhysicsWorld) -> (Vec<Drawable>, Vec<ColliderHandle
             .collision_groups(groups::pedestal()),
         None,
     );
-    scenery.push(Drawable {
+    scenery.drawables.push(Drawable {
         shape: Shape::Cylinder {
             radius: PEDESTAL_RADIUS,
             half_height: ROBOT_BASE.z / 2.0,
@@ -517,7 +460,77 @@ fn build_scenery(world: &mut PhysicsWorld) -> (Vec<Drawable>, Vec<ColliderHandle
         color: [0.5, 0.5, 0.5],
         id: 0,
     });
-    (scenery, environment)
+    (scenery.drawables, scenery.environment)
+}
+
+/// The scenery as [`build_scenery`] adds it.
+#[derive(Default)]
+struct Scenery {
+    drawables: Vec<Drawable>,
+    environment: Vec<ColliderHandle>,
+}
+
+impl Scenery {
+    const TOTE_COLOR: [f32; 3] = [0.38, 0.39, 0.41];
+
+    /// A fixed box of the environment, centred at `center` with half extents `half`.
+    fn add_fixed_box(
+        &mut self,
+        world: &mut PhysicsWorld,
+        center: Vector,
+        half: Vector,
+        color: [f32; 3],
+    ) {
+        let handle = world.insert_collider(
+            ColliderBuilder::cuboid(half.x, half.y, half.z)
+                .translation(center)
+                .friction(ENVIRONMENT_FRICTION)
+                .friction_combine_rule(CoefficientCombineRule::Multiply)
+                .collision_groups(groups::environment())
+                // Its contacts are screened for the narrow phase's misfires (depth.rs); a
+                // hooked pair is never recycled, so its contacts are fresh every step.
+                .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
+            None,
+        );
+        self.environment.push(handle);
+        self.drawables.push(Drawable {
+            shape: Shape::Cuboid { half_extents: half },
+            pose: Pose::from_translation(center),
+            color,
+            id: 0,
+        });
+    }
+
+    /// A tote: its floor, then its walls across x, then across y.
+    fn add_tote(&mut self, world: &mut PhysicsWorld, tote: &Tote) {
+        let center = Vector::new(tote.center[0], tote.center[1], 0.0);
+        let [hx, hy] = tote.inner_half;
+        let t = tote::WALL_THICKNESS;
+        self.add_fixed_box(
+            world,
+            Vector::new(center.x, center.y, tote.floor_top / 2.0),
+            Vector::new(hx + t, hy + t, tote.floor_top / 2.0),
+            Self::TOTE_COLOR,
+        );
+        let wall_half_z = (tote.wall_top - tote.floor_top) / 2.0;
+        let wall_z = tote.floor_top + wall_half_z;
+        for sx in [-1.0, 1.0] {
+            self.add_fixed_box(
+                world,
+                Vector::new(center.x + sx * (hx + t / 2.0), center.y, wall_z),
+                Vector::new(t / 2.0, hy + t, wall_half_z),
+                Self::TOTE_COLOR,
+            );
+        }
+        for sy in [-1.0, 1.0] {
+            self.add_fixed_box(
+                world,
+                Vector::new(center.x, center.y + sy * (hy + t / 2.0), wall_z),
+                Vector::new(hx, t / 2.0, wall_half_z),
+                Self::TOTE_COLOR,
+            );
+        }
+    }
 }
 
 /// Solver settings the grasps depend on.

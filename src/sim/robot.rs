@@ -283,6 +283,86 @@ const FINGER_SPEED: f32 = 0.15;
 /// force as soon as a finger is blocked instead of easing off near the target speed.
 const FINGER_DAMPING: f32 = 1.0e8;
 
+/// One finger as [`Gripper::new`] builds it: its body, the pad and the link that carry it,
+/// and its prismatic joint to the palm.
+struct Finger {
+    body: RigidBodyHandle,
+    pad: ColliderHandle,
+    link: ColliderHandle,
+    joint: ImpulseJointHandle,
+}
+
+impl Finger {
+    /// The finger on `side` (+1 or −1 along tool0's y) of the open jaw.
+    fn new(
+        world: &mut PhysicsWorld,
+        tool0: Pose,
+        palm: RigidBodyHandle,
+        side: f32,
+        force: f32,
+        pad_friction: f32,
+    ) -> Self {
+        // Finger frame: origin on the pad's inner face, on the closing axis; the finger
+        // extends outward (away from the other finger) along `side`·y.
+        let half_open = GRIPPER.max_opening / 2.0;
+        let body = world.insert_body(
+            RigidBodyBuilder::dynamic()
+                .pose(tool0 * Pose::from_translation(Vector::new(0.0, side * half_open, 0.0)))
+                // No CCD: its motion clamping hides the contact from the motor, which
+                // then never builds up the grip force.
+                .can_sleep(false),
+        );
+        // A contact with a held object that reads deeper than the box allows is a
+        // narrow-phase misfire, dropped for the step (penetration.rs): one spun a held pear out
+        // of the jaw on the way to bin 2. The link's contacts are screened like the pad's.
+        let part = |half_length: f32, setback: f32, centre_z: f32| {
+            ColliderBuilder::cuboid(
+                GRIPPER.pad_width / 2.0,
+                GRIPPER.pad_thickness / 2.0,
+                half_length,
+            )
+            .translation(Vector::new(0.0, side * setback, centre_z))
+            .mass(FINGER_MASS / 2.0)
+            .friction(pad_friction)
+            .friction_combine_rule(CoefficientCombineRule::Multiply)
+            .collision_groups(groups::finger())
+            .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS)
+        };
+        let pad = part(
+            GRIPPER.pad_height / 2.0,
+            GRIPPER.pad_thickness / 2.0,
+            GRIPPER.tcp_offset - GRIPPER.pad_height / 2.0,
+        );
+        let pad = world.insert_collider(pad, Some(body));
+        let link_length = GRIPPER.tcp_offset - GRIPPER.pad_height - GRIPPER.palm_length;
+        let link = part(
+            link_length / 2.0,
+            LINK_SETBACK + GRIPPER.pad_thickness / 2.0,
+            GRIPPER.palm_length + link_length / 2.0,
+        );
+        let link = world.insert_collider(link, Some(body));
+        // Anchored at the pads: with the anchor up at the palm, the long lever arm to the
+        // pad let rapier's joint solve absorb the motor force (1 N reached the object
+        // instead of 40 N).
+        let anchor = Vector::new(0.0, 0.0, GRIPPER.tcp_offset - GRIPPER.pad_height / 2.0);
+        let joint = PrismaticJointBuilder::new(Vector::Y * side)
+            .local_anchor1(anchor)
+            .local_anchor2(anchor)
+            .limits([0.0, half_open])
+            .motor_model(MotorModel::AccelerationBased)
+            .motor_velocity(FINGER_SPEED, FINGER_DAMPING)
+            .motor_max_force(force)
+            .contacts_enabled(false);
+        let joint = world.insert_impulse_joint(palm, body, joint);
+        Self {
+            body,
+            pad,
+            link,
+            joint,
+        }
+    }
+}
+
 impl Gripper {
     /// Builds the gripper open at `tool0`, with `force` newtons per finger.
     pub(crate) fn new(
@@ -307,86 +387,15 @@ impl Gripper {
             ),
             Some(palm),
         );
-        let mut fingers = Vec::new();
-        let mut finger_colliders = Vec::new();
-        let mut pads = Vec::new();
-        let mut joints = Vec::new();
-        for side in [1.0f32, -1.0] {
-            // Finger frame: origin on the pad's inner face, on the closing axis; the finger
-            // extends outward (away from the other finger) along `side`·y.
-            let half_open = GRIPPER.max_opening / 2.0;
-            let finger = world.insert_body(
-                RigidBodyBuilder::dynamic()
-                    .pose(tool0 * Pose::from_translation(Vector::new(0.0, side * half_open, 0.0)))
-                    // No CCD: its motion clamping hides the contact from the motor, which
-                    // then never builds up the grip force.
-                    .can_sleep(false),
-            );
-            let pad = world.insert_collider(
-                ColliderBuilder::cuboid(
-                    GRIPPER.pad_width / 2.0,
-                    GRIPPER.pad_thickness / 2.0,
-                    GRIPPER.pad_height / 2.0,
-                )
-                .translation(Vector::new(
-                    0.0,
-                    side * GRIPPER.pad_thickness / 2.0,
-                    GRIPPER.tcp_offset - GRIPPER.pad_height / 2.0,
-                ))
-                .mass(FINGER_MASS / 2.0)
-                .friction(pad_friction)
-                .friction_combine_rule(CoefficientCombineRule::Multiply)
-                .collision_groups(groups::finger())
-                // A contact with a held object that reads deeper than the box allows is a
-                // narrow-phase misfire, dropped for the step (penetration.rs): one spun a
-                // held pear out of the jaw on the way to bin 2.
-                .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
-                Some(finger),
-            );
-            let link_length = GRIPPER.tcp_offset - GRIPPER.pad_height - GRIPPER.palm_length;
-            let link = world.insert_collider(
-                ColliderBuilder::cuboid(
-                    GRIPPER.pad_width / 2.0,
-                    GRIPPER.pad_thickness / 2.0,
-                    link_length / 2.0,
-                )
-                .translation(Vector::new(
-                    0.0,
-                    side * (LINK_SETBACK + GRIPPER.pad_thickness / 2.0),
-                    GRIPPER.palm_length + link_length / 2.0,
-                ))
-                .mass(FINGER_MASS / 2.0)
-                .friction(pad_friction)
-                .friction_combine_rule(CoefficientCombineRule::Multiply)
-                .collision_groups(groups::finger())
-                // Screened like the pad's.
-                .active_hooks(ActiveHooks::MODIFY_SOLVER_CONTACTS),
-                Some(finger),
-            );
-            // Anchored at the pads: with the anchor up at the palm, the long lever arm to the
-            // pad let rapier's joint solve absorb the motor force (1 N reached the object
-            // instead of 40 N).
-            let anchor = Vector::new(0.0, 0.0, GRIPPER.tcp_offset - GRIPPER.pad_height / 2.0);
-            let joint = PrismaticJointBuilder::new(Vector::Y * side)
-                .local_anchor1(anchor)
-                .local_anchor2(anchor)
-                .limits([0.0, half_open])
-                .motor_model(MotorModel::AccelerationBased)
-                .motor_velocity(FINGER_SPEED, FINGER_DAMPING)
-                .motor_max_force(force)
-                .contacts_enabled(false);
-            joints.push(world.insert_impulse_joint(palm, finger, joint));
-            fingers.push(finger);
-            finger_colliders.push(vec![pad, link]);
-            pads.push(pad);
-        }
+        let [a, b] =
+            [1.0f32, -1.0].map(|side| Finger::new(world, tool0, palm, side, force, pad_friction));
         Self {
             palm,
             palm_collider,
-            fingers: [fingers[0], fingers[1]],
-            finger_colliders: [finger_colliders[0].clone(), finger_colliders[1].clone()],
-            pads: [pads[0], pads[1]],
-            joints: [joints[0], joints[1]],
+            fingers: [a.body, b.body],
+            finger_colliders: [vec![a.pad, a.link], vec![b.pad, b.link]],
+            pads: [a.pad, b.pad],
+            joints: [a.joint, b.joint],
             force,
         }
     }

@@ -22,8 +22,9 @@ enum How {
     Plain,
     /// Without the right to write read-only folders (dropped as root).
     Unprivileged,
-    /// SIGINT after this many seconds.
-    InterruptAfter(u64),
+    /// SIGINT once the output (stdout or stderr) holds this phrase: the command is past its
+    /// checks and at work, however loaded the machine.
+    InterruptOnceSaid(&'static str),
     /// The reader of stdout goes away after the first line (`| head -1`).
     FirstLineOnly,
     /// While this process holds the labels' writer lock, as a running `label` would.
@@ -397,13 +398,13 @@ const CASES: &[Case] = &[
         130,
         "100000 attempts in all",
     )
-    .how(How::InterruptAfter(4)),
+    .how(How::InterruptOnceSaid("attempts in all")),
     case(
         "--data {data} eval --task empty_bin --policy random --seeds 1-100000 --max-attempts 1 --resume",
         130,
         "scenes already in",
     )
-    .how(How::InterruptAfter(4)),
+    .how(How::InterruptOnceSaid("scenes already in")),
     // A smaller or different run keeps its report beside the larger one's, never over it.
     case(
         "--data {data} eval --task empty_bin --policy random",
@@ -517,7 +518,7 @@ const CASES: &[Case] = &[
         130,
         "server stopped",
     )
-    .how(How::InterruptAfter(3)),
+    .how(How::InterruptOnceSaid("Ctrl-C stops the server")),
     case(
         "--data {data} eval --task test --checkpoint {tmp}",
         2,
@@ -906,16 +907,7 @@ fn run(ws: &Workspace, case: &Case) -> Output {
                     .unwrap();
             command.output().unwrap()
         }
-        How::InterruptAfter(seconds) => {
-            let child = command
-                .stdout(Stdio::piped())
-                .stderr(Stdio::piped())
-                .spawn()
-                .unwrap();
-            std::thread::sleep(Duration::from_secs(seconds));
-            crate::common::send_signal(&child, libc::SIGINT);
-            child.wait_with_output().unwrap()
-        }
+        How::InterruptOnceSaid(phrase) => interrupt_once_said(command, phrase),
         How::FirstLineOnly => {
             let mut child = command
                 .stdout(Stdio::piped())
@@ -941,6 +933,51 @@ fn run(ws: &Workspace, case: &Case) -> Output {
                 stderr,
             }
         }
+    }
+}
+
+/// Runs `command`, sends it SIGINT as soon as its output holds `phrase`, and returns all of its
+/// output. Fails when it ends, or a minute passes, without saying it.
+fn interrupt_once_said(mut command: Command, phrase: &str) -> Output {
+    let mut child = command
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let said = std::sync::Arc::new(std::sync::Mutex::new(Vec::<u8>::new()));
+    let readers: Vec<_> = [
+        Box::new(child.stdout.take().unwrap()) as Box<dyn Read + Send>,
+        Box::new(child.stderr.take().unwrap()),
+    ]
+    .into_iter()
+    .map(|mut pipe| {
+        let said = std::sync::Arc::clone(&said);
+        std::thread::spawn(move || {
+            let mut own = Vec::new();
+            let mut chunk = [0u8; 4096];
+            while let Ok(n @ 1..) = pipe.read(&mut chunk) {
+                own.extend_from_slice(&chunk[..n]);
+                said.lock().unwrap().extend_from_slice(&chunk[..n]);
+            }
+            own
+        })
+    })
+    .collect();
+    let what = format!("saying {phrase:?}");
+    crate::common::poll_until(&mut child, &what, Duration::from_secs(60), || {
+        let text = String::from_utf8_lossy(&said.lock().unwrap()).into_owned();
+        match text.contains(phrase) {
+            true => Ok(()),
+            false => Err(text),
+        }
+    });
+    crate::common::send_signal(&child, libc::SIGINT);
+    let status = child.wait().unwrap();
+    let mut outputs = readers.into_iter().map(|r| r.join().unwrap());
+    Output {
+        status,
+        stdout: outputs.next().unwrap(),
+        stderr: outputs.next().unwrap(),
     }
 }
 

@@ -62,6 +62,26 @@ pub fn assert_user_error(output: &Output, needles: &[&str]) {
     }
 }
 
+/// Polls `ready` every few milliseconds until it holds. Fails, naming `what` it waited for (and
+/// `why`, what `ready` saw last), when `child` ends first or `limit` passes.
+pub fn poll_until(
+    child: &mut std::process::Child,
+    what: &str,
+    limit: std::time::Duration,
+    mut ready: impl FnMut() -> Result<(), String>,
+) {
+    let started = std::time::Instant::now();
+    while let Err(why) = ready() {
+        let ended = child.try_wait().unwrap();
+        assert!(ended.is_none(), "it ended ({ended:?}) before {what}: {why}");
+        assert!(
+            started.elapsed() < limit,
+            "no {what} within {limit:?}: {why}"
+        );
+        std::thread::sleep(std::time::Duration::from_millis(2));
+    }
+}
+
 /// Sends `signal` to a child process, as a user's Ctrl-C or a supervisor's SIGTERM would.
 pub fn send_signal(child: &std::process::Child, signal: i32) {
     // SAFETY: kill only sends a signal to the given PID.

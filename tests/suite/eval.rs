@@ -514,11 +514,11 @@ fn bad_inputs_are_one_line_errors_with_exit_status_2() {
     }
     // --resume continues the report of the same task and policy (--json, else the kept copy).
     let other = setup.path("other_task.json");
-    std::fs::write(
-        &other,
-        r#"{"schema": "graspmap.eval/2", "config": {"task": "train", "policy": "random"}, "results": {"runs": []}}"#,
-    )
-    .unwrap();
+    let json = other.to_str().unwrap();
+    let out = setup.run(&[
+        "--json", json, "eval", "--task", "train", "--policy", "random",
+    ]);
+    assert_ok(&out);
     let out = setup.run(&[
         "--json",
         other.to_str().unwrap(),
@@ -530,6 +530,19 @@ fn bad_inputs_are_one_line_errors_with_exit_status_2() {
         "--resume",
     ]);
     assert_user_error(&out, &["--task train", "--task test"]);
+    // A report with a field missing is refused, naming the file and the field, never read as if
+    // the field were empty.
+    let partial = setup.path("partial.json");
+    std::fs::write(
+        &partial,
+        r#"{"schema": "graspmap.eval/2", "config": {"task": "test", "policy": "random"}, "results": {"runs": []}}"#,
+    )
+    .unwrap();
+    let json = partial.to_str().unwrap();
+    let out = setup.run(&[
+        "--json", json, "eval", "--task", "test", "--policy", "random", "--resume",
+    ]);
+    assert_user_error(&out, &["partial.json", "missing field", "drop --resume"]);
     let corrupt = setup.path("corrupt.safetensors");
     std::fs::write(&corrupt, b"not a checkpoint").unwrap();
     let out = setup.run(&[

@@ -1168,6 +1168,116 @@ fn no_files_import_each_other_in_a_cycle() {
 }
 
 // ----------------------------------------------------------------------------------------------
+// Function length.
+
+/// The most lines a function in src/ may span (issue 44), tests included.
+const MAX_FN_LINES: usize = 80;
+
+/// Functions over [`MAX_FN_LINES`] not yet split, each with the length it may not exceed:
+/// (file, name, lines). An entry that has grown fails the test, and so does one that is no
+/// longer over the limit (remove it then), so the list only shrinks.
+const NOT_YET_SPLIT: &[(&str, &str, usize)] = &[
+    // The report page has its own owner; issue 44 asks for it to be split there.
+    ("src/present/report_page/evals.rs", "details", 89),
+];
+
+/// Every function with a body in `src`: its name, the line of its `fn` and the number of lines
+/// from that line to the line of the `}` that closes its body, both counted (doc comments and
+/// attributes above the `fn` line are not). Measured on the tokens of `lex`, so braces in
+/// comments, strings and characters are not counted: after `fn name`, the first `{` or `;`
+/// outside parentheses, brackets and angle brackets opens the body (a `;` first: a declaration
+/// without one, skipped), and its `}` is found by brace matching. A function inside another is
+/// measured on its own and counts towards the outer one too. `fn(…)` pointer types, which have
+/// no name, are not functions.
+fn function_lengths(src: &str) -> Vec<(String, usize, usize)> {
+    let tokens = lex(src);
+    let mut found = Vec::new();
+    for (i, token) in tokens.iter().enumerate() {
+        let Some(name) = tokens.get(i + 1) else { break };
+        if !token.is("fn") || name.kind != Kind::Ident {
+            continue;
+        }
+        let mut depth = 0i32;
+        let mut open = None;
+        for (j, t) in tokens.iter().enumerate().skip(i + 2) {
+            match t.text.as_str() {
+                _ if t.kind == Kind::Literal => {}
+                "(" | "[" | "<" => depth += 1,
+                // `->` is no closing angle bracket.
+                ">" if tokens[j - 1].is("-") => {}
+                ")" | "]" | ">" => depth -= 1,
+                "{" if depth <= 0 => {
+                    open = Some(j);
+                    break;
+                }
+                ";" if depth <= 0 => break,
+                _ => {}
+            }
+        }
+        let Some(open) = open else { continue };
+        let mut braces = 0;
+        for t in &tokens[open..] {
+            if t.is("{") {
+                braces += 1;
+            } else if t.is("}") {
+                braces -= 1;
+                if braces == 0 {
+                    found.push((name.text.clone(), token.line, t.line - token.line + 1));
+                    break;
+                }
+            }
+        }
+    }
+    found
+}
+
+/// Every function in src/ longer than `max` lines, longest first, as `path:line: fn name: n lines`,
+/// but those of `allowed` (file, name, lines) within their own length; and every entry of
+/// `allowed` that is no longer over `max`.
+fn long_functions(sources: &[Source], max: usize, allowed: &[(&str, &str, usize)]) -> Vec<String> {
+    let mut long: Vec<(usize, String)> = Vec::new();
+    let mut still_long = BTreeSet::new();
+    for s in sources {
+        for (name, line, n) in function_lengths(&s.text) {
+            if n <= max {
+                continue;
+            }
+            let known = allowed.iter().find(|(p, f, _)| *p == s.path && *f == name);
+            if let Some(&(_, _, most)) = known {
+                still_long.insert((s.path.as_str(), name.clone()));
+                if n <= most {
+                    continue;
+                }
+            }
+            long.push((n, format!("{}:{line}: fn {name}: {n} lines", s.path)));
+        }
+    }
+    long.sort_by(|a, b| b.0.cmp(&a.0).then_with(|| a.1.cmp(&b.1)));
+    let mut found: Vec<String> = long.into_iter().map(|(_, l)| l).collect();
+    for (path, name, _) in allowed {
+        if !still_long.contains(&(*path, name.to_string())) {
+            found.push(format!(
+                "{path}: fn {name} is no longer over {max} lines: remove it from NOT_YET_SPLIT"
+            ));
+        }
+    }
+    found
+}
+
+#[test]
+fn no_function_in_src_is_longer_than_80_lines() {
+    let root = Path::new(option_env!("CARGO_MANIFEST_DIR").unwrap_or("."));
+    let mut sources = Vec::new();
+    read_tree(&root.join("src"), root, &mut sources);
+    let long = long_functions(&sources, MAX_FN_LINES, NOT_YET_SPLIT);
+    assert!(
+        long.is_empty(),
+        "functions in src/ longer than {MAX_FN_LINES} lines (split them):\n{}",
+        long.join("\n")
+    );
+}
+
+// ----------------------------------------------------------------------------------------------
 // The parser and the graph on small inputs.
 
 #[cfg(test)]
@@ -1543,6 +1653,59 @@ fn tail() { crate::tail::V }
         let mid = a.files.iter().find(|f| f.path == "src/mid.rs").unwrap();
         assert!(mid.edges.iter().all(|e| e.target_file == "src/mid.rs"));
         assert_eq!(check_cycles(&a), Vec::<String>::new());
+    }
+
+    #[test]
+    fn function_lengths_match_braces_from_the_fn_line() {
+        let src = "\
+/// Docs and attributes are not counted.
+#[inline]
+pub(crate) fn short<T: Into<u8>>(x: T) -> u8 {
+    x.into()
+}
+trait T {
+    fn declared(&self) -> Vec<u8>;
+    fn provided(&self)
+    where
+        Self: Sized,
+    {
+        let f: fn(u8) -> u8 = |x| x; // { not a brace
+        let s = \"}}}\";
+        let c = '{';
+        /* } */
+        inner();
+        fn inner() {}
+    }
+}
+";
+        assert_eq!(
+            function_lengths(src),
+            [
+                ("short".to_owned(), 3, 3),
+                ("provided".to_owned(), 8, 11),
+                ("inner".to_owned(), 17, 1),
+            ]
+        );
+        let sources = [Source {
+            path: "src/a.rs".to_owned(),
+            text: src.to_owned(),
+        }];
+        assert_eq!(
+            long_functions(&sources, 3, &[]),
+            ["src/a.rs:8: fn provided: 11 lines"]
+        );
+        assert_eq!(long_functions(&sources, 11, &[]), Vec::<String>::new());
+        // A function not yet split passes within its recorded length, fails beyond it, and its
+        // entry fails once it is split.
+        assert!(long_functions(&sources, 3, &[("src/a.rs", "provided", 11)]).is_empty());
+        assert_eq!(
+            long_functions(&sources, 3, &[("src/a.rs", "provided", 10)]),
+            ["src/a.rs:8: fn provided: 11 lines"]
+        );
+        assert_eq!(
+            long_functions(&sources, 11, &[("src/a.rs", "provided", 11)]),
+            ["src/a.rs: fn provided is no longer over 11 lines: remove it from NOT_YET_SPLIT"]
+        );
     }
 
     #[test]

@@ -4,7 +4,7 @@
 use std::path::PathBuf;
 
 use crate::commands::RunBy;
-use crate::data::trials::Shard;
+use crate::data::shard::Shard;
 use crate::model::unet::Precision;
 use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;

@@ -11,6 +11,7 @@ use image::RgbImage;
 mod config;
 mod sweep;
 
+use super::attempt::{objects_in_bin, Look};
 use super::{workers, Context};
 use crate::assets::objects::ObjectModel;
 use crate::data::atomic::save_image_atomic;
@@ -25,8 +26,8 @@ use crate::policy::heights::HeightMap;
 use crate::policy::model::ModelPolicy;
 use crate::policy::push::plan_push;
 use crate::policy::suppression::{Suppression, SuppressionConfig};
+use crate::policy::Policy;
 use crate::policy::PolicyKind;
-use crate::policy::{Observation, Policy};
 use crate::present::envelope::write_versioned_report;
 use crate::present::eval_report::Task;
 use crate::present::eval_report::{
@@ -81,70 +82,31 @@ enum Finished {
     Attempt(u64, AttemptRecord),
 }
 
+/// What an evaluation runs: the seeds of this run (its shard's), the objects and where their
+/// visualisations go, and the attempts of a scene at most.
+struct Plan {
+    seeds: Vec<u64>,
+    names: Vec<String>,
+    models: Vec<ObjectModel>,
+    vis_dir: PathBuf,
+    per_scene: u64,
+}
+
 /// Runs the command.
 pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
     let start = Instant::now();
-    let seeds = config.run_seeds();
-    if seeds.is_empty() {
-        anyhow::bail!(
-            "--shard {} holds none of the {} of --seeds; give at most {} shards",
-            config.shard,
-            counted(config.seeds.len(), "seed"),
-            config.seeds.len()
-        );
-    }
-    // A missing or wrong checkpoint is reported before anything starts; each thread then
-    // loads its own copy.
-    policy(&config)?;
-    let split = context.split()?;
-    let names: Vec<String> = match config.task {
-        Task::Train => split.train.clone(),
-        Task::Test => split.test.clone(),
-        Task::EmptyBin => split.all(),
+    let Plan {
+        seeds,
+        names,
+        models,
+        vis_dir,
+        per_scene,
+    } = plan(context, &config)?;
+    let mut runs = match config.resume {
+        true => resumed(context, &config, &names, seeds.len())?,
+        false => Vec::new(),
     };
-    let models = context.objects.load_all(&names)?;
-    let vis_dir = context.data.join("affordance").join(match config.task {
-        Task::Train => "eval_pick_training_vis",
-        Task::Test => "eval_pick_testing_vis",
-        Task::EmptyBin => "eval_empty_bin_vis",
-    });
-    let kept = kept_path(context, &config, &names);
-    check_output_dir(kept.parent().unwrap_or(&context.data), "the reports folder")?;
-    check_output_dir(&vis_dir, "the visualisations folder")?;
-    if let Some(record) = &config.record {
-        check_output_file(record, "--record")?;
-    }
-    let per_scene = match config.task {
-        Task::EmptyBin => u64::from(config.max_attempts),
-        _ => models.len() as u64 * u64::from(ATTEMPTS_PER_OBJECT),
-    };
-    announce_plan(context, config.task, per_scene, seeds.len());
-
-    let mut runs = if config.resume {
-        let source = resume_source(context, &kept);
-        let runs = finished_runs(source, &config)?;
-        context.say(&format!(
-            "resuming: {} of {} already in {}",
-            runs.len(),
-            counted(seeds.len(), "scene"),
-            source.display()
-        ));
-        runs
-    } else {
-        Vec::new()
-    };
-    let jobs: Vec<Job> = seeds
-        .iter()
-        .filter(|&&seed| !runs.iter().any(|r| r.seed == seed))
-        .flat_map(|&seed| match config.task {
-            Task::EmptyBin => vec![Job::Scene(seed)],
-            Task::Train | Task::Test => (0..models.len())
-                .flat_map(|object| {
-                    (0..ATTEMPTS_PER_OBJECT).map(move |try_| Job::Attempt { seed, object, try_ })
-                })
-                .collect(),
-        })
-        .collect();
+    let jobs = jobs(&config, &seeds, &runs, models.len());
     // The episode video is one thread's frames, in order.
     let (workers, network_threads) = match config.record {
         Some(_) => (1, context.threads),
@@ -161,43 +123,20 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         max_attempts: config.max_attempts,
         give_up_after: config.give_up_after,
         push_unverified: config.push_unverified,
-        bar: context.progress_bar("attempts", per_scene * seeds.len() as u64, 0),
+        bar: context.progress_bar(
+            "attempts",
+            per_scene * seeds.len() as u64,
+            per_scene * runs.len() as u64,
+        ),
         check_invariants: config.check_invariants,
         live_lines: workers == 1,
     };
-    evaluation.bar.inc(per_scene * runs.len() as u64);
-    let per_seed = models.len() * ATTEMPTS_PER_OBJECT as usize;
-    let mut attempts_of: BTreeMap<u64, Vec<AttemptRecord>> = BTreeMap::new();
-    let states = workers::run_in_order(
+    let recording = evaluation.run_jobs(
+        &config,
         &jobs,
-        workers,
-        || {
-            crate::model::use_threads(network_threads);
-            Ok(Worker {
-                policy: policy(&config)?,
-                recording: config.record.as_ref().map(|_| Vec::new()),
-            })
-        },
-        |worker, job| evaluation.run_job(worker, &models, job),
-        |finished| match finished {
-            Finished::Scene(run, lines) => {
-                for line in &lines {
-                    evaluation.bar.suspend(|| context.say(line));
-                }
-                runs.push(run);
-            }
-            Finished::Attempt(seed, record) => {
-                let attempts = attempts_of.entry(seed).or_default();
-                attempts.push(record);
-                if attempts.len() == per_seed {
-                    runs.push(SceneRun {
-                        seed,
-                        attempts: std::mem::take(attempts),
-                        bin: None,
-                    });
-                }
-            }
-        },
+        &models,
+        (workers, network_threads),
+        &mut runs,
     )?;
     // Resumed runs come first; a report lists its scenes in the order of --seeds.
     runs.sort_by_key(|r| seeds.iter().position(|&s| s == r.seed));
@@ -214,13 +153,11 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
             interrupted,
         ));
     }
-    let recording = states.into_iter().next().and_then(|w| w.recording);
     if let (Some(path), Some(frames)) = (&config.record, &recording) {
         save_video_atomic(frames, EPISODE_EVERY_STEPS, path)
             .with_context(|| format!("writing --record {}", path.display()))?;
         context.say(&format!("wrote the episode video to {}", path.display()));
     }
-
     finish(
         context,
         &config,
@@ -230,6 +167,89 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         workers,
         &evaluation.vis_dir,
     )
+}
+
+/// The evaluation's seeds, objects and outputs, each checked before anything runs, and its
+/// plan announced.
+fn plan(context: &Context, config: &EvalConfig) -> anyhow::Result<Plan> {
+    let seeds = config.run_seeds();
+    if seeds.is_empty() {
+        anyhow::bail!(
+            "--shard {} holds none of the {} of --seeds; give at most {} shards",
+            config.shard,
+            counted(config.seeds.len(), "seed"),
+            config.seeds.len()
+        );
+    }
+    // A missing or wrong checkpoint is reported before anything starts; each thread then
+    // loads its own copy.
+    policy(config)?;
+    let split = context.split()?;
+    let names: Vec<String> = match config.task {
+        Task::Train => split.train.clone(),
+        Task::Test => split.test.clone(),
+        Task::EmptyBin => split.all(),
+    };
+    let models = context.objects.load_all(&names)?;
+    let vis_dir = context.data.join("affordance").join(match config.task {
+        Task::Train => "eval_pick_training_vis",
+        Task::Test => "eval_pick_testing_vis",
+        Task::EmptyBin => "eval_empty_bin_vis",
+    });
+    let kept = kept_path(context, config, &names);
+    check_output_dir(kept.parent().unwrap_or(&context.data), "the reports folder")?;
+    check_output_dir(&vis_dir, "the visualisations folder")?;
+    if let Some(record) = &config.record {
+        check_output_file(record, "--record")?;
+    }
+    let per_scene = match config.task {
+        Task::EmptyBin => u64::from(config.max_attempts),
+        _ => models.len() as u64 * u64::from(ATTEMPTS_PER_OBJECT),
+    };
+    announce_plan(context, config.task, per_scene, seeds.len());
+    Ok(Plan {
+        seeds,
+        names,
+        models,
+        vis_dir,
+        per_scene,
+    })
+}
+
+/// `--resume`: the scenes an earlier report of this evaluation finished.
+fn resumed(
+    context: &Context,
+    config: &EvalConfig,
+    names: &[String],
+    scenes: usize,
+) -> anyhow::Result<Vec<SceneRun>> {
+    let kept = kept_path(context, config, names);
+    let source = resume_source(context, &kept);
+    let runs = finished_runs(source, config)?;
+    context.say(&format!(
+        "resuming: {} of {} already in {}",
+        runs.len(),
+        counted(scenes, "scene"),
+        source.display()
+    ));
+    Ok(runs)
+}
+
+/// The jobs of the seeds not in `runs`: a scene each (empty_bin), or each attempt of each
+/// object (train/test).
+fn jobs(config: &EvalConfig, seeds: &[u64], runs: &[SceneRun], objects: usize) -> Vec<Job> {
+    seeds
+        .iter()
+        .filter(|&&seed| !runs.iter().any(|r| r.seed == seed))
+        .flat_map(|&seed| match config.task {
+            Task::EmptyBin => vec![Job::Scene(seed)],
+            Task::Train | Task::Test => (0..objects)
+                .flat_map(|object| {
+                    (0..ATTEMPTS_PER_OBJECT).map(move |try_| Job::Attempt { seed, object, try_ })
+                })
+                .collect(),
+        })
+        .collect()
 }
 
 /// Summarises a finished evaluation, prints it, and writes its report to --json and to
@@ -295,6 +315,53 @@ fn policy(config: &EvalConfig) -> anyhow::Result<Box<dyn Policy + Send>> {
 }
 
 impl Evaluation<'_> {
+    /// Runs `jobs` on `workers` threads of `network_threads` each, adding each finished scene
+    /// to `runs` (a train/test seed once all its attempts are in); the episode's frames with
+    /// --record.
+    fn run_jobs(
+        &self,
+        config: &EvalConfig,
+        jobs: &[Job],
+        models: &[ObjectModel],
+        (workers, network_threads): (usize, u16),
+        runs: &mut Vec<SceneRun>,
+    ) -> anyhow::Result<Option<Vec<RgbImage>>> {
+        let per_seed = models.len() * ATTEMPTS_PER_OBJECT as usize;
+        let mut attempts_of: BTreeMap<u64, Vec<AttemptRecord>> = BTreeMap::new();
+        let states = workers::run_in_order(
+            jobs,
+            workers,
+            || {
+                crate::model::use_threads(network_threads);
+                Ok(Worker {
+                    policy: policy(config)?,
+                    recording: config.record.as_ref().map(|_| Vec::new()),
+                })
+            },
+            |worker, job| self.run_job(worker, models, job),
+            |finished| match finished {
+                Finished::Scene(run, lines) => {
+                    for line in &lines {
+                        self.bar.suspend(|| self.context.say(line));
+                    }
+                    runs.push(run);
+                }
+                Finished::Attempt(seed, record) => {
+                    let attempts = attempts_of.entry(seed).or_default();
+                    attempts.push(record);
+                    if attempts.len() == per_seed {
+                        runs.push(SceneRun {
+                            seed,
+                            attempts: std::mem::take(attempts),
+                            bin: None,
+                        });
+                    }
+                }
+            },
+        )?;
+        Ok(states.into_iter().next().and_then(|w| w.recording))
+    }
+
     /// Runs one job on a worker's policy; `None` when a signal stopped it.
     fn run_job(
         &self,
@@ -387,20 +454,7 @@ impl Evaluation<'_> {
             record.timing.wall = attempt_start.elapsed().as_secs_f64() + setup_seconds;
             record.timing.sim += setup_seconds;
             setup_seconds = 0.0;
-            let mut line = format!("{moved}/{total} objects moved");
-            // A success whose object did not stay in bin 2 is what a user would otherwise see
-            // as an object that vanished.
-            if let (Some(held), Some(placed)) = (&record.held, record.placed) {
-                let rests = match placed {
-                    ObjectLocation::Bin1 => Some("back in bin 1"),
-                    ObjectLocation::Lost => Some("outside both bins"),
-                    ObjectLocation::Bin2 => None,
-                };
-                if let Some(rests) = rests {
-                    line += &format!(" ({held} was carried but came to rest {rests})");
-                }
-            }
-            say(line);
+            say(moved_line(&record, moved, total));
             self.bar.inc(1);
             attempts.push(record);
             if interrupt::requested().is_some() {
@@ -414,24 +468,12 @@ impl Evaluation<'_> {
                 break;
             }
         }
-        let left = count(&cell, ObjectLocation::Bin1);
-        say(format!("{left} objects left in the bin."));
-        let locations: BTreeMap<String, ObjectLocation> = cell
-            .objects()
-            .iter()
-            .enumerate()
-            .map(|(i, o)| (o.model.name.clone(), cell.locate(i)))
-            .collect();
+        let bin = bin_outcome(&cell, gave_up);
+        say(format!("{} objects left in the bin.", bin.left));
         let run = SceneRun {
             seed,
             attempts,
-            bin: Some(BinOutcome {
-                moved: count(&cell, ObjectLocation::Bin2),
-                left,
-                lost: count(&cell, ObjectLocation::Lost),
-                locations,
-                gave_up,
-            }),
+            bin: Some(bin),
         };
         Ok(Some((run, lines)))
     }
@@ -464,29 +506,12 @@ impl Evaluation<'_> {
         attempt: u32,
         vis: PathBuf,
     ) -> anyhow::Result<AttemptRecord> {
+        let in_bin = objects_in_bin(cell);
         let render_start = Instant::now();
-        let frame = cell.capture();
-        let rgb = frame.to_rgb_image();
+        let look = Look::take(cell, in_bin, drop_seed, attempt);
         let render = render_start.elapsed().as_secs_f64();
-        let in_bin: Vec<u16> = cell
-            .objects()
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| cell.locate(*i) == ObjectLocation::Bin1)
-            .map(|(_, o)| o.id)
-            .collect();
-        let camera = *cell.camera();
-        let view = Observation {
-            camera: &camera,
-            frame: &frame,
-            rgb: &rgb,
-            in_bin: &in_bin,
-            // The policy's own stream: one per attempt, independent of the drop.
-            attempt_seed: drop_seed
-                .wrapping_mul(1_000)
-                .wrapping_add(u64::from(attempt)),
-        };
-        let decision = worker.policy.decide(&view, memory);
+        let (camera, frame, rgb) = (&look.camera, &look.frame, &look.rgb);
+        let decision = worker.policy.decide(&look.observation(), memory);
         let vis_written = match &decision.vis {
             Some(image) => {
                 save_image_atomic(image, &vis)?;
@@ -494,20 +519,14 @@ impl Evaluation<'_> {
             }
             None => None,
         };
-        let aimed_at = decision.grasp.as_ref().ok().and_then(|g| {
-            let id = frame.id_at(g.u, g.v);
-            cell.objects()
-                .iter()
-                .find(|o| o.id == id)
-                .map(|o| o.model.name.clone())
-        });
+        let aimed_at = (decision.grasp.as_ref().ok()).and_then(|&g| look.aimed_at(cell, g));
         if worker.recording.is_some() {
             cell.start_recording(EPISODE_EVERY_STEPS);
         }
         let sim_start = Instant::now();
         let push = match (&decision.grasp, decision.verified) {
             (Ok(g), Some(false)) if self.push_unverified => {
-                plan_push(&HeightMap::new(&camera, &frame), *g)
+                plan_push(&HeightMap::new(camera, frame), *g)
             }
             _ => None,
         };
@@ -516,7 +535,7 @@ impl Evaluation<'_> {
                 let pushed = cell.push(&push);
                 PickOutcome::failure(PickReason::Pushed, pushed.detail)
             }
-            (Ok(g), None) => cell.pick(&world_grasp(&camera, &frame, *g)),
+            (Ok(g), None) => cell.pick(&world_grasp(camera, frame, *g)),
             (Err(why), None) => PickOutcome::failure(PickReason::Ungraspable, why.to_string()),
         };
         let sim = sim_start.elapsed().as_secs_f64();
@@ -556,6 +575,41 @@ impl Evaluation<'_> {
             self.bar.suspend(|| eprintln!("{line}"));
         }
         Ok(record)
+    }
+}
+
+/// empty_bin's line after an attempt: the objects moved so far, and where a carried object
+/// came to rest when that was not bin 2 (what a user would otherwise see as an object that
+/// vanished).
+fn moved_line(record: &AttemptRecord, moved: usize, total: usize) -> String {
+    let mut line = format!("{moved}/{total} objects moved");
+    if let (Some(held), Some(placed)) = (&record.held, record.placed) {
+        let rests = match placed {
+            ObjectLocation::Bin1 => Some("back in bin 1"),
+            ObjectLocation::Lost => Some("outside both bins"),
+            ObjectLocation::Bin2 => None,
+        };
+        if let Some(rests) = rests {
+            line += &format!(" ({held} was carried but came to rest {rests})");
+        }
+    }
+    line
+}
+
+/// Where each object of an empty_bin scene ended up.
+fn bin_outcome(cell: &Workcell, gave_up: bool) -> BinOutcome {
+    let locations: BTreeMap<String, ObjectLocation> = cell
+        .objects()
+        .iter()
+        .enumerate()
+        .map(|(i, o)| (o.model.name.clone(), cell.locate(i)))
+        .collect();
+    BinOutcome {
+        moved: count(cell, ObjectLocation::Bin2),
+        left: count(cell, ObjectLocation::Bin1),
+        lost: count(cell, ObjectLocation::Lost),
+        locations,
+        gave_up,
     }
 }
 

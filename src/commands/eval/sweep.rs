@@ -3,7 +3,7 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::{bail, Context as _};
+use anyhow::bail;
 
 use super::config::{EvalConfig, ATTEMPTS_PER_OBJECT};
 use crate::commands::{Context, RunBy};
@@ -11,7 +11,7 @@ use crate::interrupt;
 use crate::named::{counted, Named};
 use crate::policy::PolicyKind;
 use crate::present::envelope::write_versioned_report;
-use crate::present::eval_report::{summarise, SceneRun, Task};
+use crate::present::eval_report::{summarise, EvalReport, SceneRun, Task};
 use crate::present::kept_reports::Comparable;
 use crate::sim::WorkcellConfig;
 
@@ -133,24 +133,11 @@ pub(super) fn finished_runs(report: &Path, config: &EvalConfig) -> anyhow::Resul
     if !report.is_file() {
         return Ok(Vec::new());
     }
-    let text = std::fs::read_to_string(report)
-        .with_context(|| format!("reading the report to resume, {}", report.display()))?;
-    let bad = || {
-        format!(
-            "{} is not a graspmap eval report to resume from (delete it, or drop --resume)",
-            report.display()
-        )
-    };
-    let value: serde_json::Value = serde_json::from_str(&text).with_context(bad)?;
-    let schema = value["schema"].as_str().unwrap_or_default();
-    if !matches!(schema, "graspmap.eval/1" | "graspmap.eval/2") {
-        bail!("{}: schema '{schema}'", bad());
-    }
-    for (key, now) in [
-        ("task", config.task.name()),
-        ("policy", config.policy.name()),
+    let earlier = EvalReport::read(report, "delete it, or drop --resume")?;
+    for (key, then, now) in [
+        ("task", earlier.config.task.name(), config.task.name()),
+        ("policy", earlier.config.policy.name(), config.policy.name()),
     ] {
-        let then = value["config"][key].as_str().unwrap_or_default();
         if then != now {
             bail!(
                 "{} ran --{key} {then}, this run --{key} {now}; resume with the same settings",
@@ -158,11 +145,8 @@ pub(super) fn finished_runs(report: &Path, config: &EvalConfig) -> anyhow::Resul
             );
         }
     }
-    let runs: Vec<SceneRun> =
-        serde_json::from_value(value["results"]["runs"].clone()).with_context(bad)?;
     let mine = config.run_seeds();
-    Ok(runs
-        .into_iter()
+    Ok((earlier.results.runs.into_iter())
         .filter(|r| mine.contains(&r.seed))
         .collect())
 }

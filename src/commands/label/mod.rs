@@ -20,6 +20,7 @@ use crate::data::labels::{Label, LabelStore, Labels, Progress};
 use crate::data::lock::StoreLock;
 use crate::data::output::check_output_dir;
 use crate::grasp::world::world_grasp;
+use crate::grasp::PixelGrasp;
 use crate::interrupt;
 use crate::metrics::FailureTally;
 use crate::named::{counted, Named};
@@ -27,6 +28,7 @@ use crate::present::envelope::write_report;
 use crate::present::web::session::{pad_width_px, AttemptView, LabelSession, FILM_EVERY_STEPS};
 use crate::present::web::WebServer;
 use crate::sim::pick::PickReason;
+use crate::vision::render::Frame;
 use clicks::Clicker;
 pub(crate) use config::{ClickNoise, ClickSource, LabelConfig};
 use store::{check, delete, prepare, writes_depth};
@@ -72,10 +74,15 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     if let Some((object, k)) = &args.delete {
         return delete(context, &store, object, *k);
     }
+    label(context, &args, &store)
+}
+
+/// Labels the training objects until each has its labels, with the store's lock held.
+fn label(context: &Context, args: &LabelConfig, store: &LabelStore) -> anyhow::Result<()> {
     let split = context.split()?;
     check_clutter(args.clutter, &split.train)?;
     let models = context.objects.load_all(&split.train)?;
-    let clicker = clicker(&args, &split.train, &split.test)?;
+    let clicker = clicker(args, &split.train, &split.test)?;
     if let Clicker::Web { server, .. } = &clicker {
         context.say(&format!(
             "labelling page at {} (open it in a browser; Ctrl-C stops the server)",
@@ -83,7 +90,7 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
         ));
     }
 
-    let (labels, progress) = prepare(&store, &args, &clicker, &split.train)?;
+    let (labels, progress) = prepare(store, args, &clicker, &split.train)?;
 
     let start = Instant::now();
     // A person at the prompt, or at the page, needs a quiet terminal and one round at a time.
@@ -100,9 +107,9 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     let stop = AtomicBool::new(false);
     let job = ObjectJob {
         context,
-        args: &args,
-        store: &store,
-        write_depth: writes_depth(&store, &labels),
+        args,
+        store,
+        write_depth: writes_depth(store, &labels),
         clicker: &clicker,
         bar: &bar,
         verbose_rounds: !matches!(clicker, Clicker::Scripted { .. }),
@@ -117,9 +124,9 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     let finished = |summaries: &[ObjectSummary]| {
         finish(
             context,
-            &args,
+            args,
             &clicker,
-            &store,
+            store,
             &split.train,
             summaries,
             start,
@@ -134,26 +141,47 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
     bar.finish_and_clear();
     if let Some(interrupted) = interrupt::requested() {
         let state = lock(&shared);
-        let kept = state.labels.len();
-        let wanted = args.per_object as u64 * split.train.len() as u64;
-        if matches!(clicker, Clicker::Web { .. })
-            && labels_in(&state.labels, &split.train, args.per_object) == wanted
-        {
-            context.say(&format!(
-                "server stopped; {} in {}, complete",
-                counted(kept, "label"),
-                store.dir().display()
-            ));
-            return Ok(());
-        }
+        return stopped(
+            context,
+            args,
+            &clicker,
+            store,
+            &split.train,
+            &state.labels,
+            interrupted,
+        );
+    }
+    finished(&outcome?)
+}
+
+/// What a signal leaves: a complete dataset when the labels page had finished it (its server
+/// stopped), else the labels so far and how to continue.
+fn stopped(
+    context: &Context,
+    args: &LabelConfig,
+    clicker: &Clicker,
+    store: &LabelStore,
+    train: &[String],
+    labels: &Labels,
+    interrupted: interrupt::Interrupted,
+) -> anyhow::Result<()> {
+    let kept = labels.len();
+    let wanted = args.per_object as u64 * train.len() as u64;
+    if matches!(clicker, Clicker::Web { .. }) && labels_in(labels, train, args.per_object) == wanted
+    {
         context.say(&format!(
-            "{interrupted}: {} kept in {}, each verified and saved; rerun the same command to continue",
+            "server stopped; {} in {}, complete",
             counted(kept, "label"),
             store.dir().display()
         ));
-        return Err(interrupted.into());
+        return Ok(());
     }
-    finished(&outcome?)
+    context.say(&format!(
+        "{interrupted}: {} kept in {}, each verified and saved; rerun the same command to continue",
+        counted(kept, "label"),
+        store.dir().display()
+    ));
+    Err(interrupted.into())
 }
 
 /// Prints the summary of a complete dataset and writes the JSON report.
@@ -240,6 +268,20 @@ fn clicker(args: &LabelConfig, train: &[String], test: &[String]) -> anyhow::Res
             }
         }
     })
+}
+
+/// What a clicked grasp did in the simulator: its reason, detail, the object it carried, and
+/// (for the page) the oblique view's frames.
+type Tried = (PickReason, String, Option<String>, Vec<image::RgbImage>);
+
+/// A round of one object, done: what [`ObjectJob::record_round`] stores.
+struct RoundDone<'a> {
+    object: &'a str,
+    /// The object's rounds, this one included.
+    rounds: u32,
+    frame: &'a Frame,
+    click: &'a Result<PixelGrasp, String>,
+    tried: Tried,
 }
 
 /// Dataset state shared by the workers (and the labels page, under `--web`).
@@ -342,46 +384,18 @@ impl ObjectJob<'_> {
             let click = self
                 .clicker
                 .click(object, id, round, round_seed, &camera, &frame)?;
-            let (reason, detail, lifted, film) = self.try_click(&mut cell, &frame, &click);
+            let tried = self.try_click(&mut cell, &frame, &click);
+            let (reason, detail) = (tried.0, tried.1.clone());
             let line = round_line(object, round, &click, reason, &detail);
             round += 1;
-            {
-                let mut state = lock(shared);
-                let Shared { labels, progress } = &mut *state;
-                let stored = matches!((reason, &click), (PickReason::Success, Ok(_)));
-                if let (true, Ok(grasp)) = (stored, &click) {
-                    // The round's object, whichever object the pick carried: the label is a
-                    // grasp that worked in this round's image (docs/data.md, "Clutter rounds").
-                    let depth = self.write_depth.then(|| frame.to_depth_image_mm());
-                    self.store.append(
-                        labels,
-                        object,
-                        Label::from(*grasp),
-                        &frame.to_rgb_image(),
-                        depth.as_ref(),
-                    )?;
-                    summary.new_labels += 1;
-                    summary.lifted_other += usize::from(lifted.as_deref() != Some(object));
-                    self.bar.inc(1);
-                } else {
-                    summary.failures.add(reason.name());
-                }
-                have = labels.of(object).len();
-                progress.set_rounds(object, round, have as u32);
-                progress.record_sources(object, self.clicker.name());
-                self.store.save_progress(progress)?;
-                if let Clicker::Web { session, .. } = self.clicker {
-                    session.finish_attempt(AttemptView {
-                        object: object.to_owned(),
-                        round: round - 1,
-                        grasp: click.as_ref().ok().copied(),
-                        reason: reason.name().to_owned(),
-                        detail: detail.clone(),
-                        stored,
-                        frames: film,
-                    })?;
-                }
-            }
+            let done = RoundDone {
+                object,
+                rounds: round,
+                frame: &frame,
+                click: &click,
+                tried,
+            };
+            have = self.record_round(shared, done, &mut summary)?;
             if self.verbose_rounds || reason != PickReason::Success {
                 self.bar.suspend(|| self.context.say(&line));
             }
@@ -393,14 +407,68 @@ impl ObjectJob<'_> {
 }
 
 impl ObjectJob<'_> {
+    /// Stores a round's outcome under the dataset's lock: the label when the click succeeded,
+    /// the rounds and sources in the progress file, and the attempt for the labels page.
+    /// Returns the object's labels now.
+    fn record_round(
+        &self,
+        shared: &Mutex<Shared>,
+        done: RoundDone,
+        summary: &mut ObjectSummary,
+    ) -> anyhow::Result<usize> {
+        let RoundDone {
+            object,
+            rounds,
+            frame,
+            click,
+            tried: (reason, detail, lifted, film),
+        } = done;
+        let mut state = lock(shared);
+        let Shared { labels, progress } = &mut *state;
+        let stored = matches!((reason, click), (PickReason::Success, Ok(_)));
+        if let (true, Ok(grasp)) = (stored, click) {
+            // The round's object, whichever object the pick carried: the label is a grasp that
+            // worked in this round's image (docs/data.md, "Clutter rounds").
+            let depth = self.write_depth.then(|| frame.to_depth_image_mm());
+            self.store.append(
+                labels,
+                object,
+                Label::from(*grasp),
+                &frame.to_rgb_image(),
+                depth.as_ref(),
+            )?;
+            summary.new_labels += 1;
+            summary.lifted_other += usize::from(lifted.as_deref() != Some(object));
+            self.bar.inc(1);
+        } else {
+            summary.failures.add(reason.name());
+        }
+        let have = labels.of(object).len();
+        progress.set_rounds(object, rounds, have as u32);
+        progress.record_sources(object, self.clicker.name());
+        self.store.save_progress(progress)?;
+        if let Clicker::Web { session, .. } = self.clicker {
+            session.finish_attempt(AttemptView {
+                object: object.to_owned(),
+                round: rounds - 1,
+                grasp: click.as_ref().ok().copied(),
+                reason: reason.name().to_owned(),
+                detail,
+                stored,
+                frames: film,
+            })?;
+        }
+        Ok(have)
+    }
+
     /// Runs the clicked grasp in the simulator: its reason, detail, the object it carried, and
     /// (for the page) the oblique view's frames.
     fn try_click(
         &self,
         cell: &mut crate::sim::Workcell,
-        frame: &crate::vision::render::Frame,
-        click: &Result<crate::grasp::PixelGrasp, String>,
-    ) -> (PickReason, String, Option<String>, Vec<image::RgbImage>) {
+        frame: &Frame,
+        click: &Result<PixelGrasp, String>,
+    ) -> Tried {
         let Ok(grasp) = click else {
             let why = click.as_ref().err().cloned().unwrap_or_default();
             return (PickReason::Ungraspable, why, None, Vec::new());

@@ -101,43 +101,9 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
             config.epochs
         ));
     }
-
     let start = Instant::now();
     let augment = AugmentConfig::default();
-    let bar = context.progress_bar("epochs", config.epochs as u64, run.meta.epoch as u64);
-    while run.meta.epoch < config.epochs {
-        let Some(improved) = run.epoch(&images, &config, &augment, &out_dir, &bar)? else {
-            bar.finish_and_clear();
-            let interrupted = interrupt::requested().unwrap_or(Interrupted { signal: 2 });
-            context.say(&format!(
-                "{interrupted}: epoch {} was abandoned; {} holds epoch {} complete; {}",
-                run.meta.epoch + 1,
-                out_dir.join("last.safetensors").display(),
-                run.meta.epoch,
-                match options.run_by {
-                    RunBy::Own => "rerun with --resume to continue exactly",
-                    RunBy::Improve => "rerun the same improve command to continue exactly",
-                }
-            ));
-            return Err(interrupted.into());
-        };
-        bar.inc(1);
-        let record = run.meta.history.last().copied();
-        bar.suspend(|| {
-            if let (false, Some(r)) = (context.quiet, record) {
-                eprintln!(
-                    "epoch {:>3}: train {:.5}  val {:.5}  lr {:.0e}{}",
-                    r.epoch,
-                    r.train_loss,
-                    r.val_loss,
-                    r.lr,
-                    if improved { "  best" } else { "" }
-                );
-            }
-        });
-    }
-    bar.finish_and_clear();
-
+    run.epochs(context, &options, &images, &augment)?;
     let meta = &run.meta;
     let last = meta.history.last();
     let results = TrainResults {
@@ -153,6 +119,17 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
         wall_seconds: start.elapsed().as_secs_f64(),
         checkpoint: out_dir.join("best.safetensors").display().to_string(),
     };
+    report(context, &options, &augment, resume, &results)
+}
+
+/// Prints the line of a finished training and writes its JSON report.
+fn report(
+    context: &Context,
+    options: &TrainOptions,
+    augment: &AugmentConfig,
+    resume: bool,
+    results: &TrainResults,
+) -> anyhow::Result<()> {
     context.say(&format!(
         "trained {} on {}{} ({} train / {} validation): best validation loss {:.5} at epoch {} -> {} ({:.1} s)",
         counted(results.epochs_run as usize, "epoch"),
@@ -169,6 +146,7 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
         results.wall_seconds
     ));
     if let Some(json) = &context.json {
+        let config = &options.config;
         let resolved = serde_json::json!({
             "global": context,
             "train": config,
@@ -180,9 +158,59 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
             "trials": options.trials,
             "start_from": options.start_from,
         });
-        write_report(json, "train", config.seed, &resolved, &results)?;
+        write_report(json, "train", config.seed, &resolved, results)?;
     }
     Ok(())
+}
+
+impl Run {
+    /// Trains the epochs left up to `--epochs`, with a progress bar and a line per epoch; a
+    /// signal abandons the epoch under way, and ends the command once the last whole one is
+    /// named.
+    fn epochs(
+        &mut self,
+        context: &Context,
+        options: &TrainOptions,
+        images: &[LabelledImage],
+        augment: &AugmentConfig,
+    ) -> anyhow::Result<()> {
+        let config = &options.config;
+        let out_dir = &options.out_dir;
+        let bar = context.progress_bar("epochs", config.epochs as u64, self.meta.epoch as u64);
+        while self.meta.epoch < config.epochs {
+            let Some(improved) = self.epoch(images, config, augment, out_dir, &bar)? else {
+                bar.finish_and_clear();
+                let interrupted = interrupt::requested().unwrap_or(Interrupted { signal: 2 });
+                context.say(&format!(
+                    "{interrupted}: epoch {} was abandoned; {} holds epoch {} complete; {}",
+                    self.meta.epoch + 1,
+                    out_dir.join("last.safetensors").display(),
+                    self.meta.epoch,
+                    match options.run_by {
+                        RunBy::Own => "rerun with --resume to continue exactly",
+                        RunBy::Improve => "rerun the same improve command to continue exactly",
+                    }
+                ));
+                return Err(interrupted.into());
+            };
+            bar.inc(1);
+            let record = self.meta.history.last().copied();
+            bar.suspend(|| {
+                if let (false, Some(r)) = (context.quiet, record) {
+                    eprintln!(
+                        "epoch {:>3}: train {:.5}  val {:.5}  lr {:.0e}{}",
+                        r.epoch,
+                        r.train_loss,
+                        r.val_loss,
+                        r.lr,
+                        if improved { "  best" } else { "" }
+                    );
+                }
+            });
+        }
+        bar.finish_and_clear();
+        Ok(())
+    }
 }
 
 /// The labels (unless left out) and then every trial store's trials, as training items, with

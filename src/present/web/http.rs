@@ -130,64 +130,29 @@ fn accept(listener: &TcpListener, sender: &mpsc::Sender<Incoming>, closing: &Ato
     }
 }
 
+/// What a bad request gets: `Some` answer on its stream, or `None` for a client that left.
+type Refused = Option<(TcpStream, Reply)>;
+
 /// Reads one request; `Err(Some(…))` holds the answer for a bad one, `Err(None)` a client that
 /// left before sending anything.
-fn read_request(mut stream: TcpStream) -> Result<Incoming, Option<(TcpStream, Reply)>> {
+fn read_request(mut stream: TcpStream) -> Result<Incoming, Refused> {
     let deadline = Instant::now() + READ_TIMEOUT;
-    let mut buffer = Vec::with_capacity(1024);
     let mut chunk = [0u8; 4096];
-    let head_end = loop {
-        if let Some(end) = find_head_end(&buffer) {
-            break end;
-        }
-        if buffer.len() > MAX_HEAD_BYTES {
-            let reply = Reply::error(
-                431,
-                &format!("the request head is larger than {MAX_HEAD_BYTES} bytes"),
-            );
-            return Err(Some((stream, reply)));
-        }
-        match read_until(&mut stream, &mut chunk, deadline) {
-            // A client that leaves mid-head gets no answer either: nobody reads it.
-            Ok(0) => return Err(None),
-            Ok(n) => buffer.extend_from_slice(&chunk[..n]),
-            Err(Read408) => {
-                let reply = Reply::error(
-                    408,
-                    &format!(
-                        "the request head did not arrive within {} s",
-                        READ_TIMEOUT.as_secs()
-                    ),
-                );
-                return Err(Some((stream, reply)));
-            }
-        }
+    let (mut buffer, head_end) = match read_head(&mut stream, &mut chunk, deadline) {
+        Ok(head) => head,
+        Err(reply) => return Err(reply.map(|reply| (stream, reply))),
     };
-    let mut headers = [httparse::EMPTY_HEADER; MAX_HEADERS];
-    let mut parsed = httparse::Request::new(&mut headers);
+    let Head {
+        method,
+        target,
+        headers,
+    } = match parse_head(&buffer[..head_end]) {
+        Ok(head) => head,
+        Err(reply) => return Err(Some((stream, reply))),
+    };
     let bad = |stream: TcpStream, status: u16, message: &str| {
         Err(Some((stream, Reply::error(status, message))))
     };
-    if let Err(e) = parsed.parse(&buffer[..head_end]) {
-        let status = if e == httparse::Error::TooManyHeaders {
-            431
-        } else {
-            400
-        };
-        return bad(stream, status, &format!("malformed request head: {e}"));
-    }
-    let method = parsed.method.unwrap_or_default().to_owned();
-    let target = parsed.path.unwrap_or_default().to_owned();
-    let headers: Vec<(String, String)> = parsed
-        .headers
-        .iter()
-        .map(|h| {
-            (
-                h.name.to_owned(),
-                String::from_utf8_lossy(h.value).trim().to_owned(),
-            )
-        })
-        .collect();
     let header = |name: &str| {
         headers
             .iter()
@@ -219,26 +184,11 @@ fn read_request(mut stream: TcpStream) -> Result<Incoming, Option<(TcpStream, Re
     {
         return Err(None);
     }
-    let mut body = buffer.split_off(head_end);
-    while body.len() < length {
-        match read_until(&mut stream, &mut chunk, deadline) {
-            Ok(0) => return bad(stream, 400, "the body ended short of its Content-Length"),
-            Ok(n) => body.extend_from_slice(&chunk[..n]),
-            Err(Read408) => {
-                return bad(
-                    stream,
-                    408,
-                    &format!(
-                        "the body stopped short of its Content-Length for {} s",
-                        READ_TIMEOUT.as_secs()
-                    ),
-                )
-            }
-        }
-    }
-    // Bytes past the Content-Length would be a second request; each answer closes the
-    // connection, so they are not read.
-    body.truncate(length);
+    let body = buffer.split_off(head_end);
+    let body = match read_body(&mut stream, &mut chunk, deadline, body, length) {
+        Ok(body) => body,
+        Err(reply) => return Err(Some((stream, reply))),
+    };
     Ok(Incoming {
         method,
         target,
@@ -246,6 +196,115 @@ fn read_request(mut stream: TcpStream) -> Result<Incoming, Option<(TcpStream, Re
         body,
         stream,
     })
+}
+
+/// Reads until the end of the request head: what was read, and where the head ends in it;
+/// `Err(None)` when the client left mid-head (nobody would read an answer).
+fn read_head(
+    stream: &mut TcpStream,
+    chunk: &mut [u8],
+    deadline: Instant,
+) -> Result<(Vec<u8>, usize), Option<Reply>> {
+    let mut buffer = Vec::with_capacity(1024);
+    loop {
+        if let Some(end) = find_head_end(&buffer) {
+            return Ok((buffer, end));
+        }
+        if buffer.len() > MAX_HEAD_BYTES {
+            return Err(Some(Reply::error(
+                431,
+                &format!("the request head is larger than {MAX_HEAD_BYTES} bytes"),
+            )));
+        }
+        match read_until(stream, chunk, deadline) {
+            Ok(0) => return Err(None),
+            Ok(n) => buffer.extend_from_slice(&chunk[..n]),
+            Err(Read408) => {
+                return Err(Some(Reply::error(
+                    408,
+                    &format!(
+                        "the request head did not arrive within {} s",
+                        READ_TIMEOUT.as_secs()
+                    ),
+                )))
+            }
+        }
+    }
+}
+
+/// A request's head, parsed.
+struct Head {
+    method: String,
+    target: String,
+    headers: Vec<(String, String)>,
+}
+
+/// The method, target and headers of a request head.
+fn parse_head(head: &[u8]) -> Result<Head, Reply> {
+    let mut headers = [httparse::EMPTY_HEADER; MAX_HEADERS];
+    let mut parsed = httparse::Request::new(&mut headers);
+    if let Err(e) = parsed.parse(head) {
+        let status = if e == httparse::Error::TooManyHeaders {
+            431
+        } else {
+            400
+        };
+        return Err(Reply::error(
+            status,
+            &format!("malformed request head: {e}"),
+        ));
+    }
+    let method = parsed.method.unwrap_or_default().to_owned();
+    let target = parsed.path.unwrap_or_default().to_owned();
+    let headers = parsed
+        .headers
+        .iter()
+        .map(|h| {
+            (
+                h.name.to_owned(),
+                String::from_utf8_lossy(h.value).trim().to_owned(),
+            )
+        })
+        .collect();
+    Ok(Head {
+        method,
+        target,
+        headers,
+    })
+}
+
+/// Reads the rest of a body of `length` bytes, `body` holding what came with the head.
+fn read_body(
+    stream: &mut TcpStream,
+    chunk: &mut [u8],
+    deadline: Instant,
+    mut body: Vec<u8>,
+    length: usize,
+) -> Result<Vec<u8>, Reply> {
+    while body.len() < length {
+        match read_until(stream, chunk, deadline) {
+            Ok(0) => {
+                return Err(Reply::error(
+                    400,
+                    "the body ended short of its Content-Length",
+                ))
+            }
+            Ok(n) => body.extend_from_slice(&chunk[..n]),
+            Err(Read408) => {
+                return Err(Reply::error(
+                    408,
+                    &format!(
+                        "the body stopped short of its Content-Length for {} s",
+                        READ_TIMEOUT.as_secs()
+                    ),
+                ))
+            }
+        }
+    }
+    // Bytes past the Content-Length would be a second request; each answer closes the
+    // connection, so they are not read.
+    body.truncate(length);
+    Ok(body)
 }
 
 /// The deadline passed before the client sent what it announced.
