@@ -12,11 +12,13 @@ use super::suppression::Suppression;
 use super::verify::{CheckConfig, Verifier};
 use super::{Decision, Observation, Policy};
 use crate::data::input::{InputKind, NetInput};
+use crate::grasp::draw::JawPx;
 use crate::grasp::gripper::GRIPPER;
 use crate::grasp::tote::PICK_TOTE;
 use crate::grasp::PixelGrasp;
-use crate::model::inference::{AffordanceModel, Scored};
-use crate::model::maps::{visualisation, Choice};
+use crate::model::inference::AffordanceModel;
+use crate::model::maps::{AffordanceMaps, Choice};
+use crate::model::picture::affordance_picture;
 
 /// How the model policy checks the network's candidates (docs/evaluation.md).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -141,7 +143,7 @@ impl ModelPolicy {
         let kind = self.model.input();
         let depth = (kind == InputKind::Rgbd).then(|| view.frame.to_depth_image_mm());
         let input = NetInput::new(kind, view.rgb.clone(), depth.as_ref());
-        let Scored { rotated, mut maps } = self
+        let mut maps = self
             .model
             .score(&input)
             .expect("the policy builds the input its model was trained on");
@@ -150,7 +152,7 @@ impl ModelPolicy {
         Decision {
             grasp: Ok(choice.grasp),
             choice: Some(choice),
-            vis: Some(visualisation(&rotated, &maps, &choice)),
+            vis: picture(view, &maps, &choice),
             network_seconds: start.elapsed().as_secs_f64(),
             verified: None,
         }
@@ -176,7 +178,7 @@ impl Policy for ModelPolicy {
         let kind = self.model.input();
         let depth = (kind == InputKind::Rgbd).then(|| frame.to_depth_image_mm());
         let input = NetInput::new(kind, view.rgb.clone(), depth.as_ref());
-        let Scored { rotated, mut maps } = self
+        let mut maps = self
             .model
             .score(&input)
             .expect("the policy builds the input its model was trained on");
@@ -253,11 +255,18 @@ impl Policy for ModelPolicy {
         Decision {
             grasp: Ok(choice.grasp),
             choice: Some(choice),
-            vis: Some(visualisation(&rotated, &maps, &choice)),
+            vis: picture(view, &maps, &choice),
             network_seconds,
             verified,
         }
     }
+}
+
+/// The decision's picture: the maps as the policy ranked them, over the camera's image, with
+/// the gripper to that camera's scale (none for a camera that does not see the tote floor).
+fn picture(view: &Observation, maps: &AffordanceMaps, choice: &Choice) -> Option<image::RgbImage> {
+    let jaw = JawPx::at_floor(view.camera)?;
+    Some(affordance_picture(view.rgb, maps, choice, jaw))
 }
 
 /// The first of `ranked` (best first) that `passes`, among those scoring at least `floor` times
