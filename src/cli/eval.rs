@@ -146,7 +146,7 @@ pub(crate) struct PredictArgs {
     /// Model weights [default: DATA/affordance/best.safetensors].
     #[arg(long, value_name = "PATH")]
     pub(crate) checkpoint: Option<PathBuf>,
-    /// Where to write the 512 × 512 visualisation [default: DATA/affordance/predict_vis/<image stem>.png].
+    /// Where to write the picture of the maps over the image [default: DATA/affordance/predict_vis/<image stem>.png].
     #[arg(long, value_name = "PNG")]
     pub(crate) out: Option<PathBuf>,
     /// The image's depth, 16-bit millimetres as `scene --depth` writes it (rgbd models need it).

@@ -1,4 +1,5 @@
-//! `graspmap predict`: the trained model's best grasp on a user's 128 × 128 image, with the 8-rotation visualisation.
+//! `graspmap predict`: the trained model's best grasp on a user's 128 × 128 image, with the picture of
+//! its 8 maps over the image (model::picture).
 
 use std::path::{Path, PathBuf};
 
@@ -10,10 +11,13 @@ use crate::data::atomic::save_image_atomic;
 use crate::data::input::{read_depth_png, InputKind, NetInput};
 use crate::data::observation::read_observation;
 use crate::data::output::check_output_file;
-use crate::model::inference::{AffordanceModel, Scored};
-use crate::model::maps::{visualisation, Choice};
+use crate::grasp::draw::JawPx;
+use crate::model::inference::AffordanceModel;
+use crate::model::maps::Choice;
+use crate::model::picture::affordance_picture;
 use crate::model::unet::Precision;
 use crate::present::envelope::write_report;
+use crate::vision::camera::Camera;
 
 /// What `graspmap predict` reads and writes, resolved by the CLI.
 #[derive(Debug, Clone)]
@@ -24,7 +28,7 @@ pub(crate) struct PredictConfig {
     pub(crate) depth: Option<PathBuf>,
     /// The model's weights.
     pub(crate) checkpoint: PathBuf,
-    /// Where the 512 × 512 visualisation goes.
+    /// Where the picture of the maps goes.
     pub(crate) out: PathBuf,
     /// Arithmetic of the network.
     pub(crate) precision: Precision,
@@ -61,11 +65,13 @@ pub(crate) fn run(context: &Context, args: PredictConfig) -> anyhow::Result<()> 
     let model = AffordanceModel::load(checkpoint, precision)?;
     let input = observation_input(&model, checkpoint, image, args.depth.as_deref())?;
     let start = std::time::Instant::now();
-    let Scored { rotated, maps } = model.score(&input)?;
+    let maps = model.score(&input)?;
     let choice = maps.choose();
     let network_seconds = start.elapsed().as_secs_f64();
     let out = args.out.clone();
-    save_image_atomic(&visualisation(&rotated, &maps, &choice), &out)?;
+    // The image is taken to come from the workcell's camera: the gripper is drawn to its scale.
+    let jaw = JawPx::at_floor(&Camera::top_down()).expect("the top-down camera sees the floor");
+    save_image_atomic(&affordance_picture(&input.rgb, &maps, &choice, jaw), &out)?;
     let g = choice.grasp;
     context.say(&format!(
         "grasp x {} y {} angle {:.1}° score {:.3} (wrote {})",

@@ -42,12 +42,33 @@ pub(crate) fn unrotate(bin: usize, u: u32, v: u32, size: u32) -> PixelGrasp {
     }
 }
 
-/// The rotated observations the maps belong to: image `b` is the original turned by −b · 22.5°.
-#[cfg(test)]
-pub(crate) fn rotated_observations(image: &RgbImage) -> Vec<RgbImage> {
-    (0..super::BINS)
-        .map(|b| rotate_image(image, -bin_angle(b)))
-        .collect()
+/// A `size` × `size` plane (row-major) scored in the frame of the image turned by
+/// −`angle_deg`, carried back into the image's own frame: each image pixel takes the value of
+/// the plane's pixel that holds its centre turned by −`angle_deg` ([`rotate_point`]): the score
+/// the network's map gives a grasp there (as the model's `score_at` reads it). NaN where that point lies outside the plane
+/// (the corners that the rotation brought in from outside the image): nothing was scored there.
+pub(crate) fn unrotate_plane(plane: &[f32], size: u32, angle_deg: f32) -> Vec<f32> {
+    let (sin, cos) = f64::from(-angle_deg).to_radians().sin_cos();
+    let half = f64::from(size) / 2.0;
+    let mut out = Vec::with_capacity((size * size) as usize);
+    for v in 0..size {
+        for u in 0..size {
+            // map_point's rotation about the centre, with its sine and cosine computed once.
+            let dx = f64::from(u) + 0.5 - half;
+            let dy = f64::from(v) + 0.5 - half;
+            let at = [
+                (cos * dx - sin * dy + half) as f32,
+                (sin * dx + cos * dy + half) as f32,
+            ];
+            let inside = |c: f32| (0.0..size as f32).contains(&c);
+            out.push(if inside(at[0]) && inside(at[1]) {
+                plane[at[1] as usize * size as usize + at[0] as usize]
+            } else {
+                f32::NAN
+            });
+        }
+    }
+    out
 }
 
 /// The centre of an image in continuous coordinates: (w/2, h/2).
@@ -262,6 +283,34 @@ mod tests {
         corner.put_pixel(0, 0, Rgb([255, 255, 255]));
         assert_eq!(brightest(&rotate_image(&corner, 180.0)).0, (127, 127));
         assert_eq!(rotate_image(&image, 0.0), image);
+    }
+
+    #[test]
+    fn an_unrotated_plane_puts_each_score_back_where_the_image_shows_it() {
+        let size = 128;
+        for bin in 0..crate::grasp::BINS {
+            // A hot spot of map `bin`, peaking at (u, v), comes back peaking at the grasp pixel
+            // that unrotate names (a lone pixel might fall between the image's samples).
+            let (u, v) = (70, 40);
+            let mut plane = vec![0.0; (size * size) as usize];
+            for (du, dv) in (0..3).flat_map(|a| (0..3).map(move |b| (a, b))) {
+                let near = if (du, dv) == (1, 1) { 1.0 } else { 0.5 };
+                plane[((v + dv - 1) * size + u + du - 1) as usize] = near;
+            }
+            let back = unrotate_plane(&plane, size, bin_angle(bin));
+            let g = unrotate(bin, u, v, size);
+            let (best, _) = back
+                .iter()
+                .enumerate()
+                .filter(|(_, x)| x.is_finite())
+                .fold((0, f32::MIN), |b, (i, &x)| if x > b.1 { (i, x) } else { b });
+            let (bu, bv) = (best as u32 % size, best as u32 / size);
+            assert!(bu.abs_diff(g.u) <= 1 && bv.abs_diff(g.v) <= 1, "bin {bin}");
+        }
+        // A turned plane leaves its corners unscored; bin 0's is the plane itself.
+        let ramp: Vec<f32> = (0..size * size).map(|i| i as f32).collect();
+        assert!(unrotate_plane(&ramp, size, 45.0)[0].is_nan());
+        assert_eq!(unrotate_plane(&ramp, size, 0.0), ramp);
     }
 
     #[test]

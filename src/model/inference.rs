@@ -11,14 +11,6 @@ use crate::grasp::BINS;
 use crate::model::maps::AffordanceMaps;
 use crate::model::unet::{MiniUNet, Precision};
 
-/// The network's answer for one observation, with the [`BINS`] rotated views its maps score.
-pub(crate) struct Scored {
-    /// The observation's RGB rotated by −b · 22.5° for each bin b.
-    pub(crate) rotated: Vec<image::RgbImage>,
-    /// One affordance map per rotation.
-    pub(crate) maps: AffordanceMaps,
-}
-
 /// A MiniUNet with its weights, ready to predict.
 pub(crate) struct AffordanceModel {
     // Owns the weights the network's layers point into.
@@ -73,11 +65,8 @@ impl AffordanceModel {
 
     /// Scores one observation: rotates it to each of the [`BINS`] angles and runs the batch.
     /// The one scoring step of `predict` and the model policy.
-    pub(crate) fn score(&self, input: &NetInput) -> anyhow::Result<Scored> {
-        let rotated_input = rotated_inputs(input);
-        let maps = self.predict(&rotated_input)?;
-        let rotated = rotated_input.into_iter().map(|r| r.rgb).collect();
-        Ok(Scored { rotated, maps })
+    pub(crate) fn score(&self, input: &NetInput) -> anyhow::Result<AffordanceMaps> {
+        self.predict(&rotated_inputs(input))
     }
 
     /// Affordance (sigmoid of the logits) for the [`BINS`] rotated observations, one batch.

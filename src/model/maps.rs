@@ -1,14 +1,11 @@
-//! The network's answer for one observation: [`BINS`] rotated affordance maps, the argmax and
-//! ranked actions rotated back into the original image, and the reference's visualisation grid
-//! (docs/evaluation.md).
+//! The network's answer for one observation: [`BINS`] rotated affordance maps, and the argmax and
+//! ranked actions rotated back into the original image (docs/evaluation.md). Their picture is
+//! [`super::picture`]'s.
 //!
 //! Map `b` scores the observation rotated by −b · 22.5° (the same rotation as training, in
 //! [`crate::data::augment`]), so a peak there is a horizontal grasp in the rotated image and a grasp at
-//! angle b · 22.5° in the original. Everything here is pure: maps in, choices and images out.
+//! angle b · 22.5° in the original. Everything here is pure: maps in, choices out.
 
-use image::{Rgb, RgbImage};
-
-use crate::grasp::draw::draw_grasp;
 use crate::grasp::rotate::{rotate_point, unrotate};
 use crate::grasp::{angle_bin, bin_angle, PixelGrasp, BINS};
 
@@ -37,7 +34,6 @@ impl AffordanceMaps {
     }
 
     /// One map, row-major.
-    #[cfg(test)]
     pub(crate) fn map(&self, bin: usize) -> &[f32] {
         let plane = (self.size * self.size) as usize;
         &self.values[bin * plane..(bin + 1) * plane]
@@ -199,48 +195,10 @@ pub(crate) struct Choice {
     pub(crate) score: f32,
 }
 
-/// The ref's 512 × 512 grid: for each bin, the rotated observation beside its (suppressed) map
-/// in viridis, two pairs per row, four rows; the chosen grasp is drawn, horizontal, on both
-/// panels of its bin, which also gets a white frame.
-pub(crate) fn visualisation(
-    rotated: &[RgbImage],
-    maps: &AffordanceMaps,
-    choice: &Choice,
-) -> RgbImage {
-    let size = maps.size;
-    let mut grid = RgbImage::new(4 * size, (BINS as u32).div_ceil(2) * size);
-    for (bin, observation) in rotated.iter().enumerate().take(BINS) {
-        let x0 = (bin as u32 % 2) * 2 * size;
-        let y0 = (bin as u32 / 2) * size;
-        let mut rgb = observation.clone();
-        let mut heat = RgbImage::from_fn(size, size, |u, v| {
-            Rgb(crate::vision::colormap::viridis(maps.get(bin, u, v)))
-        });
-        if bin == choice.bin {
-            let g = PixelGrasp {
-                u: choice.rotated[0],
-                v: choice.rotated[1],
-                angle_deg: 0.0,
-            };
-            for panel in [&mut rgb, &mut heat] {
-                draw_grasp(panel, &g);
-                imageproc::drawing::draw_hollow_rect_mut(
-                    panel,
-                    imageproc::rect::Rect::at(0, 0).of_size(size, size),
-                    Rgb([255, 255, 255]),
-                );
-            }
-        }
-        image::imageops::replace(&mut grid, &rgb, i64::from(x0), i64::from(y0));
-        image::imageops::replace(&mut grid, &heat, i64::from(x0 + size), i64::from(y0));
-    }
-    grid
-}
-
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::grasp::rotate::rotated_observations;
+    use image::RgbImage;
 
     pub(crate) const SIZE: u32 = 128;
 
@@ -409,22 +367,5 @@ pub(crate) mod tests {
             .map(|c| (c.bin, c.rotated))
             .collect();
         assert_eq!(order, [(5, [100, 7]), (2, [10, 20]), (7, [64, 64])]);
-    }
-
-    #[test]
-    fn the_grid_is_512_square_with_the_map_beside_each_rotation() {
-        let image = RgbImage::from_pixel(SIZE, SIZE, Rgb([200, 10, 10]));
-        let rotated = rotated_observations(&image);
-        let maps = bumpy_maps();
-        let choice = maps.choose();
-        let grid = visualisation(&rotated, &maps, &choice);
-        assert_eq!(grid.dimensions(), (512, 512));
-        // Bin 3 sits in row 1, right half: its observation at x 256.., its map at x 384...
-        assert_eq!(
-            grid.get_pixel(256 + 64, 128 + 64).0,
-            rotated[3].get_pixel(64, 64).0
-        );
-        let expected = crate::vision::colormap::viridis(maps.get(3, 10, 5));
-        assert_eq!(grid.get_pixel(384 + 10, 128 + 5).0, expected);
     }
 }

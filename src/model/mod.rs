@@ -7,6 +7,7 @@ pub mod checkpoint;
 pub mod config;
 pub(crate) mod inference;
 pub(crate) mod maps;
+pub(crate) mod picture;
 pub mod train;
 pub mod unet;
 

@@ -12,11 +12,13 @@ use super::suppression::Suppression;
 use super::verify::{CheckConfig, Verifier};
 use super::{Decision, Observation, Policy};
 use crate::data::input::{InputKind, NetInput};
+use crate::grasp::draw::JawPx;
 use crate::grasp::gripper::GRIPPER;
 use crate::grasp::tote::PICK_TOTE;
 use crate::grasp::PixelGrasp;
-use crate::model::inference::{AffordanceModel, Scored};
-use crate::model::maps::{visualisation, AffordanceMaps, Choice};
+use crate::model::inference::AffordanceModel;
+use crate::model::maps::{AffordanceMaps, Choice};
+use crate::model::picture::affordance_picture;
 
 /// How the model policy checks the network's candidates (docs/evaluation.md).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
@@ -138,13 +140,13 @@ impl ModelPolicy {
         rng: &mut impl rand::Rng,
     ) -> Decision {
         let start = Instant::now();
-        let Scored { rotated, mut maps } = self.score(view);
+        let mut maps = self.score(view);
         memory.apply(&mut maps);
         let choice = maps.sample(temperature, rng);
         Decision {
             grasp: Ok(choice.grasp),
             choice: Some(choice),
-            vis: Some(visualisation(&rotated, &maps, &choice)),
+            vis: picture(view, &maps, &choice),
             network_seconds: start.elapsed().as_secs_f64(),
             verified: None,
         }
@@ -153,7 +155,7 @@ impl ModelPolicy {
     /// The network's 8 rotated maps of the view. The frame's depth goes through the 16-bit
     /// millimetre image that `label` stores, as in training, so the height plane gets the same
     /// rounding.
-    fn score(&self, view: &Observation) -> Scored {
+    fn score(&self, view: &Observation) -> AffordanceMaps {
         let kind = self.model.input();
         let depth = (kind == InputKind::Rgbd).then(|| view.frame.to_depth_image_mm());
         let input = NetInput::new(kind, view.rgb.clone(), depth.as_ref());
@@ -270,7 +272,7 @@ impl Policy for ModelPolicy {
     /// Score → suppression → collision check → argmax → verification → centring.
     fn decide(&self, view: &Observation, memory: &Suppression) -> Decision {
         let start = Instant::now();
-        let Scored { rotated, mut maps } = self.score(view);
+        let mut maps = self.score(view);
         // One back-projection of the frame serves the collision check, verification and
         // centring.
         let heights = HeightMap::new(view.camera, view.frame);
@@ -293,11 +295,18 @@ impl Policy for ModelPolicy {
         Decision {
             grasp: Ok(choice.grasp),
             choice: Some(choice),
-            vis: Some(visualisation(&rotated, &maps, &choice)),
+            vis: picture(view, &maps, &choice),
             network_seconds,
             verified,
         }
     }
+}
+
+/// The decision's picture: the maps as the policy ranked them, over the camera's image, with
+/// the gripper to that camera's scale (none for a camera that does not see the tote floor).
+fn picture(view: &Observation, maps: &AffordanceMaps, choice: &Choice) -> Option<image::RgbImage> {
+    let jaw = JawPx::at_floor(view.camera)?;
+    Some(affordance_picture(view.rgb, maps, choice, jaw))
 }
 
 /// The first of `ranked` (best first) that `passes`, among those scoring at least `floor` times

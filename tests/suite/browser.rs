@@ -38,13 +38,13 @@ fn find_program(name: &str) -> Option<PathBuf> {
 }
 
 /// chromedriver on a free port, killed when dropped.
-struct Driver {
+pub(crate) struct Driver {
     child: Child,
     port: u16,
 }
 
 impl Driver {
-    fn start() -> Self {
+    pub(crate) fn start() -> Self {
         let install = "install them with: sudo apt-get install -y chromium chromium-driver (./test.sh does this when run as root)";
         let driver = find_program("chromedriver")
             .unwrap_or_else(|| panic!("chromedriver is not installed; {install}"));
@@ -84,7 +84,7 @@ impl Drop for Driver {
 
 /// A headless Chromium session. Chromium runs as root in CI, hence `--no-sandbox`; the
 /// background-networking flags keep it from calling out of this closed machine.
-async fn browser(driver: &Driver, profile: &Path) -> Client {
+pub(crate) async fn browser(driver: &Driver, profile: &Path) -> Client {
     let mut caps = serde_json::Map::new();
     caps.insert(
         "goog:chromeOptions".into(),
@@ -240,7 +240,7 @@ fn shot_path() -> PathBuf {
     out_dir().join("label-round.png")
 }
 
-fn out_dir() -> PathBuf {
+pub(crate) fn out_dir() -> PathBuf {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/browser");
     std::fs::create_dir_all(&dir).unwrap();
     dir

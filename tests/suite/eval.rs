@@ -221,7 +221,8 @@ fn model_eval_reports_its_schema_writes_the_grid_and_repeats_itself() {
             "affordance/eval_pick_training_vis/YcbTomatoSoupCan_{a}.png"
         ));
         let image = image::open(&vis).unwrap();
-        assert_eq!((image.width(), image.height()), (512, 512));
+        // The best of the 8 angles at 256 px beside the 8 angles at 128, a colour bar below.
+        assert_eq!((image.width(), image.height()), (768, 278));
     }
 
     // The 3 attempts ran 2 at a time; one after another, on one thread, the same grasps,
@@ -481,7 +482,7 @@ fn predict_prints_a_grasp_and_writes_the_grid() {
     assert_eq!(results["angle"].as_f64().unwrap() % 22.5, 0.0);
     let score = results["score"].as_f64().unwrap();
     assert!((0.0..=1.0).contains(&score));
-    assert_eq!(image::open(&vis).unwrap().width(), 512);
+    assert_eq!(image::open(&vis).unwrap().width(), 768);
 }
 
 #[test]

@@ -1,8 +1,13 @@
 //! `graspmap report` on a small real run: the page and its folder, every relative link resolving,
-//! each kept eval report named, missing parts named with their command, and clear errors.
+//! each kept eval report named, missing parts named with their command, and clear errors; and the
+//! page in headless Chromium at 1280 × 800: the results on the first screen, and affordance
+//! pictures whose heat stands out.
 
 use std::path::Path;
 
+use fantoccini::Client;
+
+use crate::browser::{browser, out_dir, Driver};
 use crate::common::{assert_ok, assert_user_error, kept_report};
 use crate::eval::{read_json, Setup};
 
@@ -183,4 +188,118 @@ fn the_report_of_a_small_run_links_only_files_it_wrote_and_names_every_eval() {
         &setup.run(&["report", "--out", dir.to_str().unwrap()]),
         &["pages.html", "is a directory"],
     );
+}
+
+/// The pictures' left panel, the best of the 8 angles at twice the camera's 128 px, below the
+/// caption box in its corner (model::picture's layout).
+const SUMMARY_PANEL: (u32, u32, u32, u32) = (0, 20, 256, 256);
+
+/// The lowest heat contrast a picture must reach somewhere on the page. The overlay draws heat
+/// as colour over a grey image, so a pixel's heat is its chroma (largest channel minus
+/// smallest); the contrast is the mean of the 1 % most coloured pixels less the median. The old
+/// rendering (raw scores in viridis, a dark purple square with a peak of a few pixels) scores
+/// about 21 on this run's pictures and 20 on a 30-epoch model's, the overlay on a fixed linear
+/// 0–1 scale 38–48, and the overlay on the picture's own square-root scale 74–95.
+const MIN_HEAT_CONTRAST: f64 = 60.0;
+
+/// The heat contrast of the summary panel of an affordance picture (see [`MIN_HEAT_CONTRAST`]).
+fn heat_contrast(png: &Path) -> f64 {
+    let image = image::open(png).unwrap().into_rgb8();
+    let (x0, y0, x1, y1) = SUMMARY_PANEL;
+    assert!(
+        image.width() >= x1 && image.height() >= y1,
+        "{png:?}: too small"
+    );
+    let mut heat: Vec<u8> = (y0..y1)
+        .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+        .map(|(x, y)| {
+            let p = image.get_pixel(x, y).0;
+            p.iter().max().unwrap() - p.iter().min().unwrap()
+        })
+        .collect();
+    heat.sort_unstable();
+    let top = heat.len() / 100;
+    let mean_top = heat[heat.len() - top..]
+        .iter()
+        .map(|&h| f64::from(h))
+        .sum::<f64>()
+        / top as f64;
+    mean_top - f64::from(heat[heat.len() / 2])
+}
+
+/// Runs `script` on the page and returns its value.
+async fn js(client: &Client, script: &str) -> serde_json::Value {
+    client.execute(script, vec![]).await.unwrap()
+}
+
+#[tokio::test(flavor = "current_thread")]
+async fn the_first_screen_shows_the_results_and_the_pictures_show_the_heat() {
+    let (setup, _) = small_run();
+    assert_ok(&setup.run(&["report"]));
+    let page = setup.path("report.html");
+    let driver = Driver::start();
+    let profile = tempfile::tempdir().unwrap();
+    let client = browser(&driver, profile.path()).await;
+    client.set_window_size(1280, 800).await.unwrap();
+    client
+        .goto(&format!("file://{}", page.display()))
+        .await
+        .unwrap();
+    let view = js(&client, "return [innerWidth, innerHeight];").await;
+    assert_eq!(view[0], 1280, "{view}");
+    // The results table ends within the first 800 px, its three task rows in it, and the
+    // episode video starts there too.
+    let table = js(
+        &client,
+        r#"const t = document.querySelector("table.results");
+           if (!t) return null;
+           const rows = Array.from(t.querySelectorAll("tr > th:first-child")).map(th => th.textContent);
+           return { bottom: t.getBoundingClientRect().bottom, rows };"#,
+    )
+    .await;
+    assert!(table.is_object(), "no results table");
+    let bottom = table["bottom"].as_f64().unwrap();
+    assert!(
+        bottom <= 800.0,
+        "the results table ends at {bottom} px: {table}"
+    );
+    let rows = table["rows"].to_string();
+    for task in ["train", "test", "empty_bin"] {
+        assert!(rows.contains(task), "no {task} row: {rows}");
+    }
+    let video_top = js(
+        &client,
+        r#"const v = document.querySelector("video"); return v && v.getBoundingClientRect().top;"#,
+    )
+    .await;
+    assert!(
+        video_top.as_f64().is_some_and(|top| top < 800.0),
+        "the episode video is not on the first screen: {video_top}"
+    );
+    std::fs::write(
+        out_dir().join("report-first-screen.png"),
+        client.screenshot().await.unwrap(),
+    )
+    .unwrap();
+    // Every affordance picture loaded; at least one has heat that stands out.
+    let pictures = js(
+        &client,
+        r#"return Array.from(document.querySelectorAll("img.affordance"))
+                 .map(i => [i.getAttribute("src"), i.complete && i.naturalWidth > 0]);"#,
+    )
+    .await;
+    let pictures = pictures.as_array().unwrap().clone();
+    assert!(!pictures.is_empty(), "no affordance picture on the page");
+    let mut contrasts = Vec::new();
+    for picture in &pictures {
+        let url = picture[0].as_str().unwrap();
+        assert_eq!(picture[1], true, "{url} did not load");
+        contrasts.push(heat_contrast(&target(setup.dir.path(), url)));
+    }
+    let best = contrasts.iter().copied().fold(f64::MIN, f64::max);
+    assert!(
+        best >= MIN_HEAT_CONTRAST,
+        "no picture's heat stands out: contrasts {contrasts:?}"
+    );
+    client.close().await.unwrap();
 }

@@ -72,7 +72,8 @@ fn three_epochs_lower_the_loss_and_write_every_artefact() {
     }
     for epoch in 1..=3 {
         let vis = image::open(out.join(format!("training_vis/{epoch:03}.png"))).unwrap();
-        assert_eq!((vis.width(), vis.height()), (384, 128));
+        // Three 256 px panels (the label, the prediction, the target) over a colour bar.
+        assert_eq!((vis.width(), vis.height()), (768, 278));
     }
     let curve = image::open(out.join("losses.png")).unwrap();
     assert_eq!((curve.width(), curve.height()), (800, 500));

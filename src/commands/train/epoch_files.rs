@@ -1,4 +1,5 @@
-//! What each epoch of `graspmap train` writes beside the checkpoints: the loss table, the loss curve and the visualisation of one validation image.
+//! What each epoch of `graspmap train` writes beside the checkpoints: the loss table, the loss curve
+//! and the picture of one validation image with the network's map over it.
 
 use std::path::Path;
 
@@ -6,11 +7,15 @@ use anyhow::Context as _;
 
 use crate::data::atomic::{save_image_atomic, write_atomic};
 use crate::data::dataset::{training_sample, LabelledImage, TrialWeighting};
-use crate::grasp::IMAGE_SIZE;
+use crate::grasp::draw::{draw_gripper, JawPx};
+use crate::grasp::rotate::unrotate_plane;
+use crate::grasp::{bin_angle, IMAGE_SIZE};
 use crate::model::checkpoint::EpochRecord;
 use crate::model::train::predict_map;
 use crate::model::unet::{MiniUNet, Precision};
-use crate::vision::colormap::viridis;
+use crate::vision::annotate::{caption, register_font, with_heat_legend, FONT};
+use crate::vision::camera::Camera;
+use crate::vision::colormap::{heat_overlay, HeatRange};
 
 pub(super) fn write_losses_csv(path: &Path, history: &[EpochRecord]) -> anyhow::Result<()> {
     let mut text = String::from("epoch,train_loss,val_loss,lr,seconds\n");
@@ -26,15 +31,8 @@ pub(super) fn write_losses_csv(path: &Path, history: &[EpochRecord]) -> anyhow::
 /// Train and validation loss against epoch (log scale), 800 × 500.
 pub(super) fn save_loss_curve(path: &Path, history: &[EpochRecord]) -> anyhow::Result<()> {
     use plotters::prelude::*;
-    static FONT: std::sync::Once = std::sync::Once::new();
     // plotters draws text with ab_glyph from a font we ship: no system fonts needed.
-    FONT.call_once(|| {
-        let _ = plotters::style::register_font(
-            "sans-serif",
-            FontStyle::Normal,
-            dejavu::sans::regular(),
-        );
-    });
+    register_font();
     let (width, height) = (800u32, 500u32);
     let mut buffer = vec![0u8; (width * height * 3) as usize];
     {
@@ -52,7 +50,7 @@ pub(super) fn save_loss_curve(path: &Path, history: &[EpochRecord]) -> anyhow::R
         };
         let epochs = history.len().max(2) as u32;
         let mut chart = ChartBuilder::on(&area)
-            .caption("graspmap train: BCE loss", ("sans-serif", 22))
+            .caption("graspmap train: BCE loss", (FONT, 22))
             .margin(12)
             .x_label_area_size(40)
             .y_label_area_size(70)
@@ -61,7 +59,7 @@ pub(super) fn save_loss_curve(path: &Path, history: &[EpochRecord]) -> anyhow::R
             .configure_mesh()
             .x_desc("epoch")
             .y_desc("loss")
-            .label_style(("sans-serif", 14))
+            .label_style((FONT, 14))
             .draw()?;
         for (name, color, value) in [
             (
@@ -85,7 +83,7 @@ pub(super) fn save_loss_curve(path: &Path, history: &[EpochRecord]) -> anyhow::R
             .configure_series_labels()
             .background_style(WHITE.mix(0.8))
             .border_style(BLACK)
-            .label_font(("sans-serif", 14))
+            .label_font((FONT, 14))
             .draw()?;
         area.present()?;
     }
@@ -94,7 +92,10 @@ pub(super) fn save_loss_curve(path: &Path, history: &[EpochRecord]) -> anyhow::R
     save_image_atomic(&image, path)
 }
 
-/// input | prediction | target, 384 × 128, for one fixed validation image.
+/// The picture of one fixed validation image, 768 × 278: the image with its label drawn as the
+/// gripper, then the network's map for the label's angle and the training target, each as heat
+/// over the image in the image's own frame, all at twice the camera's size. The prediction is
+/// coloured over its own range (the colour bar states it), the target over 0–1.
 pub(super) fn save_training_vis(
     net: &MiniUNet,
     item: &LabelledImage,
@@ -102,19 +103,47 @@ pub(super) fn save_training_vis(
     epoch: u32,
     precision: Precision,
 ) -> anyhow::Result<()> {
+    const SCALE: u32 = 2;
     let sample = training_sample(item, TrialWeighting::default(), None);
     let prediction = predict_map(net, &sample, precision);
     let size = IMAGE_SIZE;
-    let mut image = image::RgbImage::new(size * 3, size);
-    for y in 0..size {
-        for x in 0..size {
-            let i = (y * size + x) as usize;
-            let plane = (size * size) as usize;
-            let rgb = [0, 1, 2].map(|c| (sample.input[c * plane + i] * 255.0).round() as u8);
-            image.put_pixel(x, y, image::Rgb(rgb));
-            image.put_pixel(size + x, y, image::Rgb(viridis(prediction[i])));
-            image.put_pixel(2 * size + x, y, image::Rgb(viridis(sample.target[i])));
-        }
+    let angle = bin_angle(sample.bin);
+    let prediction = unrotate_plane(&prediction, size, angle);
+    let target = unrotate_plane(&sample.target, size, angle);
+    let range = HeatRange::of(prediction.iter().copied());
+    let fixed = HeatRange { lo: 0.0, hi: 1.0 };
+    let mut input = image::imageops::resize(
+        &item.image,
+        size * SCALE,
+        size * SCALE,
+        image::imageops::FilterType::Nearest,
+    );
+    let g = item.grasp;
+    let centre = [g.u as f32 + 0.5, g.v as f32 + 0.5].map(|c| c * SCALE as f32);
+    if let Some(jaw) = JawPx::at_floor(&Camera::top_down()) {
+        draw_gripper(&mut input, centre, g.angle_deg, jaw.scaled(SCALE as f32));
     }
+    let panels = [
+        (input, format!("{} #{}: the label", item.object, item.k)),
+        (
+            heat_overlay(&item.image, &prediction, range, SCALE),
+            format!("prediction at {angle}°"),
+        ),
+        (
+            heat_overlay(&item.image, &target, fixed, SCALE),
+            "target (0–1)".to_owned(),
+        ),
+    ];
+    let side = size * SCALE;
+    let mut image = image::RgbImage::new(3 * side, side);
+    for (k, (mut panel, words)) in panels.into_iter().enumerate() {
+        caption(&mut panel, (2, 2), &words, 12);
+        image::imageops::replace(&mut image, &panel, i64::from(k as u32 * side), 0);
+    }
+    let image = with_heat_legend(
+        &image,
+        range,
+        &format!("epoch {epoch}: the prediction's range"),
+    );
     save_image_atomic(&image, &dir.join(format!("{epoch:03}.png")))
 }

@@ -1,162 +1,32 @@
-//! The report's evaluation section: every report `eval` kept under DATA/reports, grouped by task
-//! and then by the settings that make runs comparable (seeds, attempts, objects:
+//! The report's folded evaluation section: every report `eval` kept under DATA/reports, grouped
+//! by task and then by the settings that make runs comparable (seeds, attempts, objects:
 //! present::kept_reports), the model beside the baselines run with the same settings, then each
-//! report's table, visualisations and video. Runs with other settings are never put side by side:
-//! each group names its settings.
+//! report's table, pictures and video. Runs with other settings are never put side by side: each
+//! group names its settings. The first screen's summary (summary.rs) picks from the same groups.
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
-
-use anyhow::Context as _;
-use serde::Deserialize;
+use std::path::Path;
 
 use super::files::Files;
 use super::html::{esc, missing};
-use crate::assets::BUNDLED_PREFIX;
+use super::kept::{groups, Entry, Picture};
 use crate::metrics::{FailureTally, Spread};
 use crate::named::Named;
 use crate::policy::PolicyKind;
-use crate::present::eval_report::{AttemptRecord, EvalResults, ObjectSummary, SceneRun, Task};
-use crate::present::kept_reports::{Comparable, DEFAULT_MAX_ATTEMPTS};
+use crate::present::eval_report::{ObjectSummary, SceneRun, Task};
 
 /// Per-attempt visualisations shown per report; the rest stay in their folder.
 const VIS_SHOWN: usize = 6;
 
-/// A kept `graspmap.eval` report: its results as `eval` writes them, and the two settings of
-/// its run the page needs (other fields are ignored).
-#[derive(Debug, Deserialize)]
-struct Kept {
-    schema: String,
-    #[serde(default)]
-    git_commit: String,
-    config: RunSettings,
-    results: EvalResults,
-}
-
-/// Where the evaluation ran, what it recorded, and the settings that decide what it can be
-/// compared with, from the report's resolved config.
-#[derive(Debug, Deserialize)]
-struct RunSettings {
-    global: RunGlobal,
-    #[serde(default)]
-    record: Option<PathBuf>,
-    /// The whole sweep's seeds (older reports: the results' seeds).
-    #[serde(default)]
-    seeds: Option<Vec<u64>>,
-    #[serde(default)]
-    max_attempts: Option<u32>,
-    #[serde(default)]
-    give_up_after: Option<u32>,
-    #[serde(default)]
-    objects: Vec<String>,
-    #[serde(default)]
-    shard: Option<String>,
-}
-
-#[derive(Debug, Deserialize)]
-struct RunGlobal {
-    data: PathBuf,
-    #[serde(default = "bundled_objects")]
-    objects_dir: PathBuf,
-    #[serde(default = "bundled_split")]
-    split_path: PathBuf,
-}
-
-fn bundled_objects() -> PathBuf {
-    PathBuf::from(format!("{BUNDLED_PREFIX}objects"))
-}
-
-fn bundled_split() -> PathBuf {
-    PathBuf::from(format!("{BUNDLED_PREFIX}objects/split.json"))
-}
-
-/// One kept report, read and checked.
-struct Entry {
-    path: PathBuf,
-    file_name: String,
-    task: Task,
-    policy: PolicyKind,
-    settings: Comparable,
-    report: Kept,
-}
-
-/// Reads every `eval_*.json` under `DATA/reports`, in name order.
-fn read_kept(dir: &Path) -> anyhow::Result<Vec<Entry>> {
-    let Ok(listing) = std::fs::read_dir(dir) else {
-        return Ok(Vec::new());
-    };
-    let mut paths: Vec<PathBuf> = listing
-        .filter_map(Result::ok)
-        .map(|e| e.path())
-        .filter(|p| {
-            p.file_name()
-                .and_then(|n| n.to_str())
-                .is_some_and(|n| n.starts_with("eval_") && n.ends_with(".json"))
-        })
-        .collect();
-    paths.sort();
-    paths.into_iter().map(|path| read_one(&path)).collect()
-}
-
-fn read_one(path: &Path) -> anyhow::Result<Entry> {
-    let fix = "delete it, or run that evaluation again";
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("reading the eval report {}", path.display()))?;
-    let report: Kept = serde_json::from_str(&text).map_err(|e| {
-        anyhow::anyhow!(
-            "{} is not a graspmap eval report ({e}); {fix}",
-            path.display()
-        )
-    })?;
-    if !matches!(
-        report.schema.as_str(),
-        "graspmap.eval/1" | "graspmap.eval/2"
-    ) {
-        anyhow::bail!(
-            "{}: unknown schema '{}'; {fix}",
-            path.display(),
-            report.schema
-        );
-    }
-    let (task, policy) = (report.results.task, report.results.policy);
-    let config = &report.config;
-    let settings = Comparable::new(
-        task,
-        config.seeds.as_deref().unwrap_or(&report.results.seeds),
-        config.max_attempts.unwrap_or(DEFAULT_MAX_ATTEMPTS),
-        config.give_up_after.unwrap_or(0),
-        &config.global.objects_dir,
-        &config.global.split_path,
-        &config.objects,
-        config.shard.clone(),
-    );
-    Ok(Entry {
-        path: path.to_path_buf(),
-        file_name: path
-            .file_name()
-            .map_or_else(String::new, |n| n.to_string_lossy().into_owned()),
-        task,
-        policy,
-        settings,
-        report,
-    })
-}
-
-/// Where a path that a report recorded lies now: as recorded, or rebased from the data directory
-/// the evaluation ran with onto the one this report reads.
-fn locate(recorded: &Path, run_data: &Path, data_dir: &Path) -> Option<PathBuf> {
-    if recorded.is_file() {
-        return Some(recorded.to_path_buf());
-    }
-    let rebased = data_dir.join(recorded.strip_prefix(run_data).ok()?);
-    rebased.is_file().then_some(rebased)
-}
-
-/// The whole section.
-pub(crate) fn evals_section(data_dir: &Path, files: &mut Files) -> anyhow::Result<String> {
-    let mut html = String::from("<h2>Evaluations</h2>\n");
-    let entries = read_kept(&data_dir.join("reports"))?;
+/// The whole section, for the reports kept in DATA; `top` is the report whose video the first
+/// screen shows (not repeated here).
+pub(crate) fn evals_section(
+    entries: &[Entry],
+    files: &mut Files,
+    top: Option<&Path>,
+) -> anyhow::Result<String> {
+    let mut html = String::new();
     if entries.is_empty() {
         html.push_str(&missing(
             "No evaluation yet",
@@ -165,8 +35,8 @@ pub(crate) fn evals_section(data_dir: &Path, files: &mut Files) -> anyhow::Resul
         return Ok(html);
     }
     for &task in Task::ALL {
-        let mut mine: Vec<&Entry> = entries.iter().filter(|e| e.task == task).collect();
-        if mine.is_empty() {
+        let groups = groups(entries.iter().filter(|e| e.task == task));
+        if groups.is_empty() {
             html.push_str(&missing(
                 &format!("No {} evaluation yet", task.name()),
                 &format!("graspmap eval --task {}", task.name()),
@@ -174,24 +44,8 @@ pub(crate) fn evals_section(data_dir: &Path, files: &mut Files) -> anyhow::Resul
             continue;
         }
         let _ = writeln!(html, "<h3>Task {}</h3>", esc(task.name()));
-        // One group per set of comparable settings: the defaults first, then in name order.
-        mine.sort_by(|a, b| {
-            (!a.settings.is_default(), &a.settings, a.file_name.as_str()).cmp(&(
-                !b.settings.is_default(),
-                &b.settings,
-                b.file_name.as_str(),
-            ))
-        });
-        let mut groups: Vec<Vec<&Entry>> = Vec::new();
-        for entry in mine {
-            match groups.last_mut() {
-                Some(group) if group[0].settings == entry.settings => group.push(entry),
-                _ => groups.push(vec![entry]),
-            }
-        }
         let several = groups.len() > 1;
-        for mut group in groups {
-            group.sort_by_key(|e| PolicyKind::ALL.iter().position(|&p| p == e.policy));
+        for group in groups {
             let settings = &group[0].settings;
             if several || !settings.is_default() {
                 let _ = writeln!(
@@ -207,7 +61,8 @@ pub(crate) fn evals_section(data_dir: &Path, files: &mut Files) -> anyhow::Resul
             }
             html.push_str(&comparison(task, &group, files)?);
             for entry in group {
-                html.push_str(&details(entry, data_dir, files)?);
+                let at_top = top == Some(entry.path.as_path());
+                html.push_str(&details(entry, files, at_top)?);
             }
         }
     }
@@ -227,7 +82,7 @@ fn comparison(task: Task, entries: &[&Entry], files: &mut Files) -> anyhow::Resu
     for entry in entries {
         let r = &entry.report.results;
         let s = &r.success;
-        let link = files.copy(&entry.path, &format!("reports/{}", entry.file_name))?;
+        let link = files.copy(&entry.path, &entry.copy_name)?;
         let class = if entry.policy == PolicyKind::Model {
             " class=\"model\""
         } else {
@@ -293,8 +148,13 @@ fn comparison(task: Task, entries: &[&Entry], files: &mut Files) -> anyhow::Resu
     Ok(html)
 }
 
-/// One report's own table, its visualisations (capped) and its video.
-fn details(entry: &Entry, data_dir: &Path, files: &mut Files) -> anyhow::Result<String> {
+/// One report's own table, its pictures (capped) and its video (unless the first screen shows
+/// it).
+pub(super) fn details(
+    entry: &Entry,
+    files: &mut Files,
+    video_at_top: bool,
+) -> anyhow::Result<String> {
     let r = &entry.report.results;
     let mut html = format!(
         "<h4>{} policy, <code>{}</code></h4>\n",
@@ -306,93 +166,98 @@ fn details(entry: &Entry, data_dir: &Path, files: &mut Files) -> anyhow::Result<
     } else {
         object_table(&r.per_object)
     });
-    let run_data = &entry.report.config.global.data;
-    // One folder per kept report (`eval_train_model.json` → `train_model/`), so that runs of
-    // one task and policy with other settings keep their own pictures.
-    let dir = entry
-        .file_name
-        .strip_prefix("eval_")
-        .and_then(|n| n.strip_suffix(".json"))
-        .map_or_else(
-            || format!("{}_{}", entry.task.name(), entry.policy.name()),
-            str::to_owned,
-        );
-    let drawn: Vec<(&SceneRun, &AttemptRecord, &PathBuf)> = r
-        .runs
-        .iter()
-        .flat_map(|run| run.attempts.iter().map(move |a| (run, a)))
-        .filter_map(|(run, a)| a.vis.as_ref().map(|v| (run, a, v)))
-        .collect();
-    if !drawn.is_empty() {
-        html.push_str("<div class=\"gallery\">\n");
-        let mut shown = 0;
-        // Spread over the whole run rather than the first few attempts of the first object.
-        let picks =
-            (0..VIS_SHOWN.min(drawn.len())).map(|k| k * drawn.len() / VIS_SHOWN.min(drawn.len()));
-        for (run, attempt, vis) in picks.map(|i| drawn[i]) {
-            let Some(found) = locate(vis, run_data, data_dir) else {
-                continue;
-            };
-            let name = found
-                .file_name()
-                .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
-            let prefix = format!("seed{}_", run.seed);
-            let name = if name.starts_with(&prefix) {
-                name
-            } else {
-                prefix + &name
-            };
-            let link = files.copy(&found, &format!("{dir}/{name}"))?;
-            let what = attempt.object.as_deref().unwrap_or("scene");
-            let outcome = if attempt.success {
-                "success"
-            } else {
-                attempt.reason.name()
-            };
-            let _ = writeln!(
-                html,
-                "<figure><img src=\"{}\" width=\"256\" height=\"256\" alt=\"attempt visualisation\"><figcaption>seed {}, {} attempt {}: {}</figcaption></figure>",
-                esc(&link),
-                run.seed,
-                esc(what),
-                attempt.attempt,
-                esc(outcome)
-            );
-            shown += 1;
-        }
-        html.push_str("</div>\n");
-        let folder = r.vis_dir.as_ref().map_or_else(
-            || "where the report's attempts name them".to_string(),
-            |d| format!("in <code>{}</code>", esc(&d.display().to_string())),
-        );
-        let wanted = VIS_SHOWN.min(drawn.len());
-        let gone = if shown < wanted {
-            format!(
-                " {} of those chosen are no longer on disk: run the evaluation again to draw them.",
-                wanted - shown
-            )
-        } else {
-            String::new()
-        };
-        let _ = writeln!(
-            html,
-            "<p class=\"note\">Showing {shown} of {} attempt visualisations (each bin's rotated image and affordance map, the chosen bin framed); all of them are {folder}.{gone}</p>",
-            drawn.len()
-        );
+    html.push_str(&gallery(entry, files)?);
+    if video_at_top {
+        html.push_str("<p class=\"note\">Its episode video is at the top of the page.</p>\n");
+    } else {
+        html.push_str(&video(entry, files)?);
     }
-    html.push_str(&video(entry, data_dir, &dir, files)?);
     Ok(html)
 }
 
-/// The episode video, if the evaluation recorded one: `<video>` for MP4, `<img>` for GIF.
-fn video(entry: &Entry, data_dir: &Path, dir: &str, files: &mut Files) -> anyhow::Result<String> {
-    let recorded = entry
-        .report
-        .results
-        .video
-        .as_ref()
-        .or(entry.report.config.record.as_ref());
-    let Some(recorded) = recorded else {
+/// A few of the report's per-attempt pictures, spread over the whole run.
+fn gallery(entry: &Entry, files: &mut Files) -> anyhow::Result<String> {
+    let r = &entry.report.results;
+    let drawn = entry.pictures();
+    if drawn.is_empty() {
+        return Ok(String::new());
+    }
+    let mut html = String::from("<div class=\"gallery\">\n");
+    let wanted = VIS_SHOWN.min(drawn.len());
+    let mut shown = 0;
+    // Spread over the whole run rather than the first few attempts of the first object.
+    for picture in (0..wanted).map(|k| &drawn[k * drawn.len() / wanted]) {
+        if let Some(figure) = figure(entry, picture, files, "")? {
+            html.push_str(&figure);
+            shown += 1;
+        }
+    }
+    html.push_str("</div>\n");
+    let folder = r.vis_dir.as_ref().map_or_else(
+        || "where the report's attempts name them".to_string(),
+        |d| format!("in <code>{}</code>", esc(&d.display().to_string())),
+    );
+    let gone = if shown < wanted {
+        format!(
+            " {} of those chosen are no longer on disk: run the evaluation again to draw them.",
+            wanted - shown
+        )
+    } else {
+        String::new()
+    };
+    let _ = writeln!(
+        html,
+        "<p class=\"note\">Showing {shown} of {} attempt pictures; all of them are {folder}.{gone} {PICTURE_KEY}</p>",
+        drawn.len()
+    );
+    Ok(html)
+}
+
+/// An attempt's picture as a `<figure>` (at its own size, class `affordance`), copied into the
+/// entry's folder; `None` when the file is no longer on disk.
+pub(super) fn figure(
+    entry: &Entry,
+    picture: &Picture,
+    files: &mut Files,
+    key: &str,
+) -> anyhow::Result<Option<String>> {
+    let Some(found) = entry.locate(&picture.path) else {
+        return Ok(None);
+    };
+    let name = found
+        .file_name()
+        .map_or_else(String::new, |n| n.to_string_lossy().into_owned());
+    let prefix = format!("seed{}_", picture.seed);
+    let name = if name.starts_with(&prefix) {
+        name
+    } else {
+        prefix + &name
+    };
+    let link = files.copy(&found, &format!("{}/{name}", entry.folder))?;
+    // Pictures of older runs have other sizes: the page takes each one's own.
+    let size = image::image_dimensions(&found).map_or_else(
+        |_| String::new(),
+        |(w, h)| format!(" width=\"{w}\" height=\"{h}\""),
+    );
+    Ok(Some(format!(
+        "<figure><img class=\"affordance\" src=\"{}\"{size} alt=\"the network's scores over the camera's image\"><figcaption>{} {}, seed {}, {} attempt {}: {}.{key}</figcaption></figure>\n",
+        esc(&link),
+        esc(entry.task.name()),
+        esc(entry.policy.name()),
+        picture.seed,
+        esc(&picture.what),
+        picture.attempt,
+        esc(&picture.outcome)
+    )))
+}
+
+/// What an attempt's picture shows, said once under each gallery.
+const PICTURE_KEY: &str = "Each shows the network's scores as heat over the camera's image: left, the best of the 8 angles at each pixel, with the executed grasp drawn as the open gripper (green pads, red closing line, to scale); right, each angle's map in the image's own frame, the chosen angle framed. The colours span the picture's own lowest to highest score on a square-root scale, as its colour bar says.";
+
+/// The episode video, if the evaluation recorded one: `<video>` for MP4, `<img>` for GIF; a
+/// line naming the command when it did not, or the file is gone.
+pub(super) fn video(entry: &Entry, files: &mut Files) -> anyhow::Result<String> {
+    let Some(recorded) = entry.recorded_video() else {
         // A sweep of several seeds has no episode video: --record films one scene.
         return Ok(
             if entry.task == Task::EmptyBin && entry.settings.seeds.len() == 1 {
@@ -409,7 +274,7 @@ fn video(entry: &Entry, data_dir: &Path, dir: &str, files: &mut Files) -> anyhow
             },
         );
     };
-    let Some(found) = locate(recorded, &entry.report.config.global.data, data_dir) else {
+    let Some(found) = entry.locate(recorded) else {
         return Ok(format!(
             "<p class=\"missing\">The episode video {} is gone: rerun the evaluation with <code>--record</code>.</p>\n",
             esc(&recorded.display().to_string())
@@ -420,16 +285,20 @@ fn video(entry: &Entry, data_dir: &Path, dir: &str, files: &mut Files) -> anyhow
         .is_some_and(|e| e.eq_ignore_ascii_case("gif"));
     let link = files.copy(
         &found,
-        &format!("{dir}/episode.{}", if gif { "gif" } else { "mp4" }),
+        &format!(
+            "{}/episode.{}",
+            entry.folder,
+            if gif { "gif" } else { "mp4" }
+        ),
     )?;
     Ok(if gif {
         format!(
-            "<p><img class=\"video\" src=\"{}\" alt=\"episode video\"></p>\n",
+            "<img class=\"video\" src=\"{}\" alt=\"episode video\">\n",
             esc(&link)
         )
     } else {
         format!(
-            "<p><video controls preload=\"metadata\" src=\"{}\">episode video (H.264 MP4)</video></p>\n",
+            "<video controls preload=\"metadata\" src=\"{}\">episode video (H.264 MP4)</video>\n",
             esc(&link)
         )
     })

@@ -57,8 +57,12 @@ impl Files {
         url
     }
 
-    /// Copies `source` into the folder as `name`; returns its link.
+    /// Copies `source` into the folder as `name`; returns its link. A file that two parts of
+    /// the page show is copied once.
     pub(crate) fn copy(&mut self, source: &Path, name: &str) -> anyhow::Result<String> {
+        if self.written.contains(&self.dir.join(name)) {
+            return Ok(self.link(name));
+        }
         let bytes =
             std::fs::read(source).with_context(|| format!("reading {}", source.display()))?;
         let target = self.dir.join(name);

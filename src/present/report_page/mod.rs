@@ -1,13 +1,18 @@
-//! The run report: one self-contained HTML page for a whole run (labels, training, every kept
-//! evaluation with its baselines, visualisations and video), written beside a folder of the
+//! The run report: one self-contained HTML page for a whole run, written beside a folder of the
 //! files it shows and linked relatively, so that the pair opens offline and travels as a zip.
+//! The first screen holds the results (summary.rs: every task's model and baselines, the
+//! `improve` rounds, the episode video and a picture of the network's scores); the labels, the
+//! training, every kept evaluation and the rounds in full follow, folded.
 //!
 //! [`write_report_page`] is the one entry point; `graspmap report` and its `--serve` call it.
 
 mod evals;
 mod files;
 mod html;
+mod improve;
+mod kept;
 mod run_parts;
+mod summary;
 
 use std::path::{Path, PathBuf};
 
@@ -31,10 +36,22 @@ pub(crate) fn write_report_page(data_dir: &Path, out_html: &Path) -> anyhow::Res
         );
     }
     let mut files = Files::new(out_html);
-    let mut body = String::new();
-    body.push_str(&run_parts::labels_section(data_dir, &mut files)?);
-    body.push_str(&run_parts::training_section(data_dir, &mut files)?);
-    body.push_str(&evals::evals_section(data_dir, &mut files)?);
+    let main = kept::read_kept(data_dir, "")?;
+    let rounds = improve::read_rounds(data_dir)?;
+    let (mut body, top) = summary::summary_section(&main, &rounds, &mut files)?;
+    let labels = run_parts::labels_section(data_dir, &mut files)?;
+    body.push_str(&fold("Labels", &labels));
+    let training = run_parts::training_section(data_dir, &mut files)?;
+    body.push_str(&fold("Training", &training));
+    let evals = evals::evals_section(&main, &mut files, top.as_deref())?;
+    body.push_str(&fold(
+        "Evaluations: every kept report, its tables, pictures and video",
+        &evals,
+    ));
+    let improve = improve::improve_section(data_dir, &rounds, &mut files)?;
+    if !improve.is_empty() {
+        body.push_str(&fold("Learning from trials: the improve rounds", &improve));
+    }
     let meta = format!(
         "Data directory <code>{}</code>; graspmap {} (commit {}).",
         esc(&data_dir.display().to_string()),
@@ -46,6 +63,14 @@ pub(crate) fn write_report_page(data_dir: &Path, out_html: &Path) -> anyhow::Res
         .replace("{{meta}}", &meta)
         .replace("{{body}}", &body);
     files.finish(&html)
+}
+
+/// A part of the page folded under its title: one click opens it.
+fn fold(title: &str, html: &str) -> String {
+    format!(
+        "<details><summary><h2>{}</h2></summary>\n{html}</details>\n",
+        esc(title)
+    )
 }
 
 #[cfg(test)]

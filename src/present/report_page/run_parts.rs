@@ -1,5 +1,5 @@
-//! The report's first two sections: the labels (counts and a few images with their grasp drawn)
-//! and the training (loss curve, last training visualisation).
+//! The report's folded labels and training sections: the labels (counts and a few images with
+//! their grasp drawn) and the training (loss curve, last training picture).
 
 use std::fmt::Write as _;
 use std::path::Path;
@@ -20,7 +20,7 @@ const LABEL_SCALE: u32 = 2;
 
 /// Labels per object, and the first image of a few objects with its grasp.
 pub(crate) fn labels_section(data_dir: &Path, files: &mut Files) -> anyhow::Result<String> {
-    let mut html = String::from("<h2>Labels</h2>\n");
+    let mut html = String::new();
     let store = LabelStore::new(data_dir.join("labels"));
     if !store.labels_path().is_file() {
         html.push_str(&missing("No labels yet", "graspmap label"));
@@ -92,9 +92,9 @@ pub(crate) fn labels_section(data_dir: &Path, files: &mut Files) -> anyhow::Resu
     Ok(html)
 }
 
-/// The loss curve and the last training visualisation.
+/// The loss curve and the last training picture.
 pub(crate) fn training_section(data_dir: &Path, files: &mut Files) -> anyhow::Result<String> {
-    let mut html = String::from("<h2>Training</h2>\n");
+    let mut html = String::new();
     let affordance = data_dir.join("affordance");
     let csv = affordance.join("losses.csv");
     if !csv.is_file() {
@@ -115,7 +115,7 @@ pub(crate) fn training_section(data_dir: &Path, files: &mut Files) -> anyhow::Re
         let link = files.copy(&path, &format!("training_vis_{epoch:03}.png"))?;
         let _ = writeln!(
             html,
-            "<figure><img src=\"{}\" alt=\"training visualisation\"><figcaption>Epoch {epoch}: input | prediction | target.</figcaption></figure>",
+            "<figure><img class=\"training\" src=\"{}\" alt=\"training picture\"><figcaption>Epoch {epoch}, one validation image: its label drawn as the gripper | the network's map for the label's angle, as heat over the image (its own range, on the colour bar) | the training target (0–1).</figcaption></figure>",
             esc(&link)
         );
     }

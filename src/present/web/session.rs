@@ -10,8 +10,7 @@ use std::time::Duration;
 use image::RgbImage;
 
 use super::{Reply, Request};
-use crate::grasp::gripper::GRIPPER;
-use crate::grasp::tote::{FLOOR_TOP, PICK_TOTE};
+use crate::grasp::draw::JawPx;
 use crate::grasp::{normalize_angle, PixelGrasp, BIN_DEG, FINGER_OFFSET_PX, IMAGE_SIZE};
 use crate::interrupt;
 use crate::vision::camera::Camera;
@@ -25,13 +24,7 @@ pub(crate) const FILM_EVERY_STEPS: u64 = 16;
 
 /// The pads' width across the closing line in image pixels, at the tote floor.
 pub(crate) fn pad_width_px(camera: &Camera) -> f32 {
-    let [x, y] = PICK_TOTE.center;
-    let centre = rapier3d::math::Vector::new(x, y, FLOOR_TOP);
-    let beside = centre + rapier3d::math::Vector::new(GRIPPER.pad_width, 0.0, 0.0);
-    match (camera.project(centre), camera.project(beside)) {
-        (Some(a), Some(b)) => ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt(),
-        _ => 4.0,
-    }
+    JawPx::at_floor(camera).map_or(4.0, |jaw| jaw.pad_width)
 }
 
 /// The most animation frames sent for one attempt; longer attempts are sampled evenly.
