@@ -67,7 +67,7 @@ done
 # Settings: the full run repeats BENCHMARKS.md's commands; --quick shrinks every count.
 if ((quick)); then
   EPOCHS=1 PER_OBJECT=2 TEST_SEEDS=0 HELD_TEST=3000 EMPTY_SEEDS=1 HELD_EMPTY=11 MAX_ATTEMPTS=2
-  ROUNDS=1 SCENES=2 ROUND_EPOCHS=1 SLURM_SEEDS=1-2 SPREAD_SEEDS= OBJECT_SEEDS=1
+  ROUNDS=1 SCENES=2 ROUND_EPOCHS=1 SLURM_SEEDS=1-2 SPREAD_SEEDS='' OBJECT_SEEDS=1
   BENCH_STEPS=2 BENCH_ROUNDS=1 SWEEP_SEEDS=1 SOAK_RANDOM=2 SOAK_MODEL=1 FUZZ_SCALE=0.01 KILLS=1
   VARIANT_LIST="rgb:1:2 rgbd:3:2"
 else
@@ -110,7 +110,7 @@ timed() { helper timed "$@"; }
 
 # eval_name BASE [FLAGS...]: the file name of an evaluation, its flags spelt out after BASE:
 # `eval_name model-test --verify-top 0 --centring` is model-test+verify-top-0+centring. A flag's
-# value that is a path is left out. render.py's eval_name builds the same names.
+# value that is a path is left out. scripts/benchmarks/reports.py's eval_name builds the same.
 eval_name() {
   local name=$1 piece
   shift
@@ -165,6 +165,13 @@ ev() {
   shift 2
   ensure_model
   eval_into "$out/eval/$(eval_name "$name" "$@").json" "$model_dir" --policy "$policy" "${spec[@]}" "$@"
+}
+
+# evals POLICY "SPEC..." [FLAGS...]: ev for each SPEC.
+evals() {
+  local policy=$1 specs=$2 spec
+  shift 2
+  for spec in $specs; do ev "$policy" "$spec" "$@"; done
 }
 
 # ev_in DIR DATA PREFIX SPEC [FLAGS...]: an evaluation of DATA into DIR/PREFIXSPEC[+FLAG...].json,
@@ -232,21 +239,25 @@ bf16_applies() {
 # ---------------------------------------------------------------------------------------------
 # The tables: each runs its commands into OUT; scripts/benchmarks/render.py reads what they leave.
 
+# pipeline_step NAME ARGS...: one timed graspmap command of the pipeline table.
+pipeline_step() {
+  local d=$out/pipeline name=$1
+  shift
+  timed "$d/times/$name.json" "$bin" --data "$d/data" --quiet --json "$d/$name.json" "$@" >"$d/$name.log" 2>&1
+}
+
 t_pipeline() {
-  local d=$out/pipeline step
+  local d=$out/pipeline start=$SECONDS
   rm -rf "$d"
   mkdir -p "$d/times"
-  local data=$d/data start=$SECONDS
-  local -A args=([label]="label --per-object $PER_OBJECT" [train]="train --epochs $EPOCHS"
-    [eval_train]="eval --task train" [eval_test]="eval --task test"
-    [eval_empty_bin]="eval --task empty_bin --n-past-action 8 --max-attempts $MAX_ATTEMPTS --record $d/empty_bin.mp4"
-    [report]="report")
-  log "pipeline: ./demo.sh's steps into $data"
-  for step in label train eval_train eval_test eval_empty_bin report; do
-    # shellcheck disable=SC2086 # each step's words are separate arguments
-    timed "$d/times/$step.json" "$bin" --data "$data" --quiet --json "$d/$step.json" ${args[$step]} \
-      >"$d/$step.log" 2>&1
-  done
+  log "pipeline: ./demo.sh's steps into $d/data"
+  pipeline_step label label --per-object "$PER_OBJECT"
+  pipeline_step train train --epochs "$EPOCHS"
+  pipeline_step eval_train eval --task train
+  pipeline_step eval_test eval --task test
+  pipeline_step eval_empty_bin eval --task empty_bin --n-past-action 8 --max-attempts "$MAX_ATTEMPTS" \
+    --record "$d/empty_bin.mp4"
+  pipeline_step report report
   echo "{\"wall_s\": $((SECONDS - start))}" >"$d/times/total.json"
   echo "$run_id" >"$d/run"
 }
@@ -315,9 +326,8 @@ t_trials() {
     ev_in "$d/eval" "$d/data" "$tag-" "$spec" "${before[@]}"
   done
   with=()
-  for spec in train-seed0 test test-heldout empty_bin-np8 empty_bin-heldout-np8; do ev oracle "$spec"; done
-  ev oracle empty_bin-np8 --give-up-after 6
-  ev oracle empty_bin-heldout-np8 --give-up-after 6
+  evals oracle "train-seed0 test test-heldout empty_bin-np8 empty_bin-heldout-np8"
+  evals oracle "empty_bin-np8 empty_bin-heldout-np8" --give-up-after 6
   # How far apart two sets of three test seeds fall on their own: test and held-out test of the
   # labels-only model, the last round and the oracle, with more seeds (SPREAD_SEEDS) beside them.
   [[ -n $SPREAD_SEEDS ]] || return 0
@@ -382,11 +392,7 @@ t_pytorch() {
   done
 }
 
-t_latency() {
-  ev model empty_bin-np8
-  ev model train-seed0
-  ev model test
-}
+t_latency() { evals model "empty_bin-np8 train-seed0 test"; }
 
 # Criterion's results go to OUT/workcell/criterion; --quick gives it a second per benchmark.
 t_workcell() {
@@ -400,29 +406,22 @@ t_workcell() {
 }
 
 t_quality() {
-  local spec
-  for spec in train-seed0 test empty_bin-seed2-np8 empty_bin empty_bin-np8 test-heldout empty_bin-heldout-np8; do
-    ev model "$spec"
-  done
-  for spec in train-seed0 test empty_bin; do ev random "$spec"; done
-  for spec in train-seed0 test empty_bin empty_bin-np8 empty_bin-heldout-np8; do ev oracle "$spec"; done
+  evals model "train-seed0 test empty_bin-seed2-np8 empty_bin empty_bin-np8 test-heldout empty_bin-heldout-np8"
+  evals random "train-seed0 test empty_bin"
+  evals oracle "train-seed0 test empty_bin empty_bin-np8 empty_bin-heldout-np8"
 }
 
 t_yardstick() {
-  local spec
-  for spec in empty_bin empty_bin-np8 empty_bin-np25 empty_bin-heldout empty_bin-heldout-np8; do ev oracle "$spec"; done
-  ev model empty_bin-np8
-  ev model empty_bin-heldout-np8
+  evals oracle "empty_bin empty_bin-np8 empty_bin-np25 empty_bin-heldout empty_bin-heldout-np8"
+  evals model "empty_bin-np8 empty_bin-heldout-np8"
 }
 
 # MESH_OBJECTS=DIR: an objects dir (with split.json) holding mesh models, for the second column.
 t_placing() {
-  local policy spec
+  local policy
   for policy in model oracle; do
-    for spec in empty_bin-np8 train-seeds1-3; do
-      ev "$policy" "$spec"
-      [[ -z ${MESH_OBJECTS:-} ]] || ev "$policy" "$spec" --objects-dir "$(realpath "$MESH_OBJECTS")"
-    done
+    evals "$policy" "empty_bin-np8 train-seeds1-3"
+    [[ -z $MESH_OBJECTS ]] || evals "$policy" "empty_bin-np8 train-seeds1-3" --objects-dir "$(realpath "$MESH_OBJECTS")"
   done
 }
 
@@ -437,42 +436,36 @@ t_sweep() {
 }
 
 t_collision() {
-  local spec check
-  for spec in train-seed0 test empty_bin empty_bin-np8; do
-    ev model "$spec" --verify-top 0
-    for check in off walls; do ev model "$spec" --verify-top 0 --collision-check "$check"; done
-  done
+  local specs="train-seed0 test empty_bin empty_bin-np8"
+  evals model "$specs" --verify-top 0
+  evals model "$specs" --verify-top 0 --collision-check off
+  evals model "$specs" --verify-top 0 --collision-check walls
 }
 
 t_verification() {
-  local spec
-  for spec in train-seed0 test empty_bin-np8 empty_bin-heldout-np8; do
-    ev model "$spec"
-    ev model "$spec" --verify-rejected 0
-    ev model "$spec" --verify-floor 0.25
-    ev model "$spec" --verify-square 0
-    ev model "$spec" --verify-strips 2 --verify-square 0
-    ev model "$spec" --verify-margin 6
-    ev model "$spec" --push-unverified false
-    ev model "$spec" --verify-top 0
-  done
+  local specs="train-seed0 test empty_bin-np8 empty_bin-heldout-np8"
+  evals model "$specs"
+  evals model "$specs" --verify-rejected 0
+  evals model "$specs" --verify-floor 0.25
+  evals model "$specs" --verify-square 0
+  evals model "$specs" --verify-strips 2 --verify-square 0
+  evals model "$specs" --verify-margin 6
+  evals model "$specs" --push-unverified false
+  evals model "$specs" --verify-top 0
 }
 
 t_centring() {
-  local spec
-  for spec in train-seed0 test empty_bin-np8; do
-    ev model "$spec" --verify-top 0
-    ev model "$spec" --verify-top 0 --centring
-  done
+  evals model "train-seed0 test empty_bin-np8" --verify-top 0
+  evals model "train-seed0 test empty_bin-np8" --verify-top 0 --centring
 }
 
 t_suppression() {
-  ev model empty_bin-np8
-  ev model empty_bin-np8 --suppress-rotation-reach 1
-  ev model empty_bin-np8 --suppress-rotation-reach 4
-  ev model empty_bin-np8 --suppression-sigma 6
-  ev model empty_bin-np8 --suppress-successes
-  ev model empty_bin
+  evals model "empty_bin empty_bin-np8"
+  local flags
+  for flags in "--suppress-rotation-reach 1" "--suppress-rotation-reach 4" "--suppression-sigma 6" --suppress-successes; do
+    # shellcheck disable=SC2086 # a setting's words are separate arguments
+    ev model empty_bin-np8 $flags
+  done
 }
 
 # The floor and the held-out seeds for the default and for rgbd with clutter 3 (the rows of

@@ -12,24 +12,8 @@ import os
 import statistics
 import sys
 
-from reports import (DASH, Unfit, after_carry, bare, count, load, load_eval, moved, paired, pct, per_seed, rate,
-                     scene, secs, seeds, skipped)
-
-def eval_name(base, *flags):
-    """The file an evaluation is stored under: its base name, then each extra flag spelt out.
-
-    scripts/benchmarks.sh's `eval_name` builds the same: ("model-test", "--verify-top 0") is
-    model-test+verify-top-0; a flag whose value is a path keeps only its name.
-    """
-    parts = [base]
-    for flag in flags:
-        words = flag.split()
-        name = words[0].removeprefix("--")
-        if len(words) > 1 and "/" not in words[1]:
-            name += "-" + words[1]
-        parts.append(name)
-    return "+".join(parts)
-
+from reports import (DASH, Unfit, after_carry, bare, count, eval_name, load, load_eval, moved, paired, pct,
+                     per_seed, rate, scene, secs, seeds, skipped)
 
 class Page:
     """One table's output, with the run's settings and the reports under OUT."""

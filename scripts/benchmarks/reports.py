@@ -51,6 +51,22 @@ def skipped(path):
     return read_json(path)["reason"]
 
 
+def eval_name(base, *flags):
+    """The file an evaluation is stored under: its base name, then each extra flag spelt out.
+
+    scripts/benchmarks.sh's `eval_name` builds the same: ("model-test", "--verify-top 0") is
+    model-test+verify-top-0; a flag whose value is a path keeps only its name.
+    """
+    parts = [base]
+    for flag in flags:
+        words = flag.split()
+        name = words[0].removeprefix("--")
+        if len(words) > 1 and "/" not in words[1]:
+            name += "-" + words[1]
+        parts.append(name)
+    return "+".join(parts)
+
+
 def per_seed(r):
     """Successes (train/test) or objects moved (empty_bin) per base seed, in seed order."""
     counts = {s: 0 for s in r["seeds"]}
