@@ -8,9 +8,10 @@
 #
 # Usage: scripts/benchmarks.sh [--quick] [TABLE...]    (no TABLE: every table, in --list order)
 #        scripts/benchmarks.sh --list
-#   --quick   a smoke run with tiny settings: 2 labels per object, 1 epoch, one seed per task,
-#             --max-attempts 2, 2 timed bench steps, a 2 + 1 scene soak, 1 % of the fuzz cases,
-#             1 kill each; its figures only show that every table runs
+#   --quick   a smoke run with tiny settings: 2 labels per object, 1 epoch, one seed per task
+#             (two in empty_bin, one for each shard of the threads table), --max-attempts 2,
+#             2 timed bench steps, 1 s per frame micro-benchmark, a 2 + 1 scene soak, 1 % of the
+#             fuzz cases, 1 kill each; its figures only show that every table runs
 #   OUT=DIR   where the raw outputs go (default target/benchmarks); each table also writes
 #             OUT/TABLE.md, OUT/machine.txt records lscpu's model name and flags and the commit,
 #             and OUT/settings.json the same with the run's counts and seeds for the renderer.
@@ -66,7 +67,7 @@ done
 
 # Settings: the full run repeats BENCHMARKS.md's commands; --quick shrinks every count.
 if ((quick)); then
-  EPOCHS=1 PER_OBJECT=2 TEST_SEEDS=0 HELD_TEST=3000 EMPTY_SEEDS=1 HELD_EMPTY=11 MAX_ATTEMPTS=2
+  EPOCHS=1 PER_OBJECT=2 TEST_SEEDS=0 HELD_TEST=3000 EMPTY_SEEDS=1-2 HELD_EMPTY=11 MAX_ATTEMPTS=2
   ROUNDS=1 SCENES=2 ROUND_EPOCHS=1 SLURM_SEEDS=1-2 SPREAD_SEEDS='' OBJECT_SEEDS=1
   BENCH_STEPS=2 BENCH_ROUNDS=1 SWEEP_SEEDS=1 SOAK_RANDOM=2 SOAK_MODEL=1 FUZZ_SCALE=0.01 KILLS=1
   VARIANT_LIST="rgb:1:2 rgbd:3:2"

@@ -27,6 +27,12 @@ def load(path):
     return None if results.get("interrupted") else results
 
 
+# Each row key (the summary's) and the file variants.sh writes it to, named for what it runs.
+FILES = {"train_vt200": "train-seed0", "train_vt0": "train-seed0+verify-top-0", "test_vt200": "test",
+         "test_vt0": "test+verify-top-0", "empty_np8_vt200": "empty_bin-np8", "empty_np0_vt200": "empty_bin",
+         "empty_np8_vt0": "empty_bin-np8+verify-top-0", "empty_np0_vt0": "empty_bin+verify-top-0"}
+
+
 def main():
     out, variants = sys.argv[1], sys.argv[2:]
     # A variant that has not been trained yet (a run stopped early) is left out.
@@ -45,9 +51,8 @@ def main():
             "train_seconds": train["wall_seconds"],
             "best_val_loss": train["best_val_loss"],
         }
-        for key in ("train_vt200", "train_vt0", "test_vt200", "test_vt0", "empty_np8_vt200", "empty_np0_vt200",
-                    "empty_np8_vt0", "empty_np0_vt0"):
-            report = load(f"{d}/eval/{key}.json")
+        for key, file in FILES.items():
+            report = load(f"{d}/eval/{file}.json")
             row[key] = None if report is None else per_seed(report)
             reports[(n, key)] = report
         rows[n] = row

@@ -40,14 +40,15 @@ def timed(path, *cmd):
 
 
 def shards(d, binary, *sweep):
+    logs = [open(f"{d}/shard-{i}-of-2.log", "w") for i in (1, 2)]
     start = time.monotonic()
     procs = [subprocess.Popen([binary, "--data", f"{d}/two-processes", "--quiet", "--threads", "1", "--json",
                                f"{d}/shard-{i}-of-2.json", *sweep, "--shard", f"{i}/2"],
-                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL) for i in (1, 2)]
+                              stdout=log, stderr=log) for i, log in zip((1, 2), logs)]
     ends = []
-    for p in procs:
+    for i, p in enumerate(procs, 1):
         if p.wait() != 0:
-            sys.exit(f"threads: a shard failed with status {p.returncode}")
+            sys.exit(f"threads: shard {i}/2 failed with status {p.returncode} (see {d}/shard-{i}-of-2.log)")
         ends.append(time.monotonic() - start)
     write(f"{d}/two-processes.time.json", {"wall_s": max(ends), "shard_walls": ends})
     return 0

@@ -8,12 +8,12 @@ one line naming the file, and exit status 1; a dash stands only for a cell that 
 (a run recorded as skipped, a combination the table does not measure).
 """
 
-import os
 import statistics
 import sys
 
 from reports import (DASH, Unfit, after_carry, bare, count, eval_name, load, load_eval, moved, paired, pct,
                      per_seed, rate, scene, secs, seeds, skipped)
+
 
 class Page:
     """One table's output, with the run's settings and the reports under OUT."""
@@ -55,7 +55,6 @@ class Page:
         for row in rows:
             self.say("| " + " | ".join(str(c) for c in row) + " |")
         self.say()
-
 
 
 # ---------------------------------------------------------------------------------------------
@@ -411,8 +410,8 @@ def variant_row(p, v):
     """One variant's row, and its reports for the paired notes."""
     e = f"variants/{v['name']}/eval"
     if not v["floor"]:
-        get = {"train": p.ev("train_vt200", under=e), "test": p.ev("test_vt200", under=e),
-               "np8": p.ev("empty_np8_vt200", under=e), "htest": p.ev("test-heldout", under=e),
+        get = {"train": p.ev("train-seed0", under=e), "test": p.ev("test", under=e),
+               "np8": p.ev("empty_bin-np8", under=e), "htest": p.ev("test-heldout", under=e),
                "hnp8": p.ev("empty_bin-heldout-np8", under=e)}
         lab, tr = p.load(f"variants/{v['name']}/label.json"), p.load(f"variants/{v['name']}/train.json")
         first = [f"{lab['total_labels']} ({lab['total_rounds']})", f"{tr['wall_seconds']:.0f}", f"{tr['best_val_loss']:.5f}"]

@@ -22,8 +22,6 @@ from reports import Unfit, paired_stats, rate  # noqa: E402
 
 FIXTURES = os.path.join(HERE, "fixtures")
 ROOT = os.path.dirname(os.path.dirname(HERE))
-# The evaluation names of scripts/variants.sh, which keeps its own.
-VARIANT_NAMES = {"train_vt200": "train-seed0", "test_vt200": "test", "empty_np8_vt200": "empty_bin-np8"}
 # The kinds of evaluation fixtures/evals has a report for, longest first so the most specific wins.
 KINDS = ("empty_bin-heldout-np8", "empty_bin-heldout", "empty_bin-seed2-np8", "empty_bin-np25", "empty_bin-np8",
          "empty_bin", "test-heldout", "train-seeds1-3", "train-seed0", "test")
@@ -35,7 +33,6 @@ def eval_fixture(path):
     """The fixture report for an evaluation file: the kind its name spells out; its
     `--verify-top 0` run where the fixtures have one."""
     base, *flags = os.path.basename(path)[:-len(".json")].split("+")
-    base = VARIANT_NAMES.get(base, base)
     kind = next(k for k in KINDS if base.endswith(k))
     kind = SAME_SCENES.get(kind, kind)
     vt0 = os.path.join(FIXTURES, "evals", f"{kind}+verify-top-0.json")
