@@ -17,14 +17,15 @@
 #             and OUT/settings.json the same with the run's counts and seeds for the renderer.
 #             Evaluations are named for what they run: OUT/eval/model-empty_bin-heldout-np8.json,
 #             OUT/eval/model-test+verify-top-0+collision-check-off.json
-#   render: python3 scripts/benchmarks/render.py TABLE OUT prints a table again from OUT
 #   GRASPMAP=path/to/graspmap   use that binary instead of building target/release/graspmap
 #   MODEL=DIR  take the labels and best.* of DIR (e.g. data, as ./demo.sh leaves it) as the model
 #             of the tables that need one, instead of labelling and training one into OUT/model
 #   BF16=1    also run bf16 training and bench on a CPU without native bf16 (libtorch emulates it)
 #   PEER=1    with --quick, still time the Python peer of `bench train` (full runs always do; the
 #             first use installs torch into .venv-bench/, about 4.7 GB)
+#   MESH_OBJECTS=DIR  the placing table's second column: an objects dir (with split.json) of meshes
 #
+# `python3 scripts/benchmarks/render.py TABLE OUT` prints a table again from OUT's JSON.
 # Outcomes (labels, weights, grasps, success rates) are deterministic per machine; times are not.
 # A full run takes hours on 2 cores (the variants alone about 40 minutes, the soak about 25).
 set -euo pipefail
@@ -417,7 +418,6 @@ t_yardstick() {
   evals model "empty_bin-np8 empty_bin-heldout-np8"
 }
 
-# MESH_OBJECTS=DIR: an objects dir (with split.json) holding mesh models, for the second column.
 t_placing() {
   local policy
   for policy in model oracle; do
