@@ -494,7 +494,8 @@ def kill_rows(p):
     for what in ("label", "train"):
         kills = [x for x in k["kills"] if x["what"] == what]
         delays = [x["delay_s"] for x in kills]
-        span = f"{len(kills)} kills at {min(delays)}–{max(delays)} s" if delays else DASH
+        at = f"{min(delays)}–{max(delays)}" if len(set(delays)) > 1 else f"{delays[0]}" if delays else ""
+        span = f"{len(kills)} kill{'s' * (len(kills) != 1)} at {at} s" if delays else DASH
         note = f" ({sum(x['resume'] for x in kills)} with `--resume`)" if what == "train" else ""
         rows.append([f"SIGKILL during `{what}`", "`scripts/kill-resume.sh`", span,
                      f"{len(kills)} resumed byte-identical{note}" + ("" if k["ok"] else "; the run failed (see kill.err)")])

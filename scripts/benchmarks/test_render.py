@@ -113,11 +113,12 @@ class Tables(unittest.TestCase):
     def test_workcell_reads_criterion_estimates(self):
         lines = rows(self.table("workcell"))
         self.assertEqual(lines[0], "| what | figure |")
-        self.assertIn("| one 128 × 128 top-down frame, 86 drawables | 1.24 ms, median |", lines)
-        self.assertIn("| one single-object pick attempt, 15 objects × seeds 1–3 in turn | 138 ms median, 127 ms mean |",
+        # Criterion's point estimates: median 1,720,120 ns; 193,101,325 ns median, 192,434,793 ns mean.
+        self.assertIn("| one 128 × 128 top-down frame, 86 drawables | 1.72 ms, median |", lines)
+        self.assertIn("| one single-object pick attempt, 15 objects × seeds 1–3 in turn | 193 ms median, 192 ms mean |",
                       lines)
-        # 12.2 simulated seconds in 0.127 s of wall.
-        self.assertIn("| simulated time per attempt | 12.2 s (≈ 96× faster than real time) |", lines)
+        # 17.40 simulated seconds in 0.1924 s of wall.
+        self.assertIn("| simulated time per attempt | 17.4 s (≈ 90× faster than real time) |", lines)
 
     def test_video_reads_the_encoding_time_from_the_eval_report(self):
         lines = rows(self.table("video"))
@@ -126,12 +127,13 @@ class Tables(unittest.TestCase):
         self.assertTrue(lines[2].startswith("| no `--record` | – | – |"), lines[2])
 
     def test_scripts_summaries(self):
-        self.assertIn("| oracle | 41/45 | 91.1 % |", rows(self.table("sweep"))[2])
+        self.assertIn("| oracle | 15/15 | 100.0 % |", rows(self.table("sweep"))[2])
         faults = rows(self.table("faults"))
-        self.assertIn("100,000 each | 0 panics, every input under 5 s and 2 GiB (95 s) |", faults[2])
-        self.assertIn("10,000 each | 0 panics, every input under 5 s and 2 GiB (120 s) |", faults[3])
-        self.assertIn("| SIGKILL during `train` | `scripts/kill-resume.sh` | 3 kills at 0.21–3.75 s "
-                      "| 3 resumed byte-identical (2 with `--resume`) |", faults)
+        self.assertIn("1,000 each | 0 panics, every input under 5 s and 2 GiB (32 s) |", faults[2])
+        # The six binary passes: 31 + 32 + 31 + 31 + 34 + 32 s.
+        self.assertIn("100 each | 0 panics, every input under 5 s and 2 GiB (191 s) |", faults[3])
+        self.assertIn("| SIGKILL during `train` | `scripts/kill-resume.sh` | 1 kill at 0.95 s "
+                      "| 1 resumed byte-identical (1 with `--resume`) |", faults)
         soak = rows(self.table("soak"))
         self.assertEqual(soak[0], "| check | random policy, 200 scenes | model, 20 scenes |")
         self.assertIn("| attempts with an object more than 5 mm inside the ground or a tote | 0 of 4,730 | 0 of 298 |",
@@ -139,6 +141,22 @@ class Tables(unittest.TestCase):
         tests = rows(self.table("tests"))
         self.assertIn("| … tests | 297 passed: 181 unit, 116 in the suite (181.5 s) | 311a1c9 |", tests)
         self.assertIn("| `bash .ci/run` (`./test.sh`, then `scripts/install-check.sh`) | 534.0 s | 311a1c9 |", tests)
+
+    def test_failed_fault_runs_say_so(self):
+        shutil.copytree(os.path.join(FIXTURES, "out"), self.out)
+        fuzz = os.path.join(self.out, "faults", "fuzz.json")
+        with open(fuzz) as f:
+            summary = json.load(f)
+        summary["passes"][1]["ok"] = False
+        with open(fuzz, "w") as f:
+            json.dump(summary, f)
+        kill = os.path.join(self.out, "faults", "kill-resume.json")
+        with open(kill, "w") as f:
+            json.dump({"k": 1, "seed": 7, "ok": False, "kills": [{"what": "label", "delay_s": 2.08, "resume": False}]}, f)
+        lines = rows(render.render("faults", self.out))
+        self.assertIn("| fuzzing | `scripts/fuzz.sh` | – | 1 of 7 passes failed (see fuzz.err) |", lines)
+        self.assertIn("| SIGKILL during `train` | `scripts/kill-resume.sh` | – "
+                      "| 0 resumed byte-identical (0 with `--resume`); the run failed (see kill.err) |", lines)
 
     def test_a_run_recorded_as_skipped_is_a_dash_not_a_failure(self):
         shutil.copytree(os.path.join(FIXTURES, "out"), self.out)
