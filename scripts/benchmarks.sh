@@ -470,9 +470,10 @@ t_suppression() {
 }
 
 # The floor and the held-out seeds for the default and for rgbd with clutter 3 (the rows of
-# BENCHMARKS.md); variants.sh writes the rest into DIR/eval/. OUT/variants/rows.json lists the rows.
+# BENCHMARKS.md); variants.sh writes the rest into DIR/eval/. OUT/variants/rows.json lists the
+# rows, and which have held-out seeds.
 t_variants() {
-  local d=$out/variants v name input clutter per label shown rows=() first="" spec
+  local d=$out/variants v name input clutter per label shown rows=() first="" spec heldout
   log "variants: scripts/variants.sh with VARIANTS=\"$VARIANT_LIST\""
   GRASPMAP=$bin VARIANTS=$VARIANT_LIST EXTRA=0 EPOCHS=$EPOCHS TEST_SEEDS=$TEST_SEEDS \
     EMPTY_SEEDS=$EMPTY_SEEDS scripts/variants.sh "$d" >"$out/logs/variants.md" 2>"$out/logs/variants.err"
@@ -482,14 +483,16 @@ t_variants() {
     label="$input, clutter $clutter${per:+, $per per object}"
     shown=$label
     [[ -n $first ]] || { first=$name && shown+=" (default)"; }
-    rows+=("{\"name\": \"$name\", \"label\": \"$shown\", \"floor\": false}")
-    if [[ $name == "$first" || ($input == rgbd && $clutter == 3 && (-z ${per:-} || $quick == 1)) ]]; then
+    heldout=false
+    if [[ $name == "$first" || ($input == rgbd && $clutter == 3 && (-z ${per:-} || $quick == 1)) ]]; then heldout=true; fi
+    rows+=("{\"name\": \"$name\", \"label\": \"$shown\", \"floor\": false, \"heldout\": $heldout}")
+    if [[ $heldout == true ]]; then
       ev_in "$d/$name/eval" "$d/$name" "" test-heldout
       ev_in "$d/$name/eval" "$d/$name" "" empty_bin-heldout-np8
       for spec in train-seed0 test empty_bin-np8 test-heldout empty_bin-heldout-np8; do
         ev_in "$d/$name/eval" "$d/$name" "" "$spec" --verify-floor 0.25
       done
-      rows+=("{\"name\": \"$name\", \"label\": \"$label, floor 0.25\", \"floor\": true}")
+      rows+=("{\"name\": \"$name\", \"label\": \"$label, floor 0.25\", \"floor\": true, \"heldout\": true}")
     fi
   done
   (IFS=,; echo "[${rows[*]}]") >"$d/rows.json"

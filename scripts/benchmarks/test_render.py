@@ -142,6 +142,14 @@ class Tables(unittest.TestCase):
         self.assertIn("| … tests | 297 passed: 181 unit, 116 in the suite (181.5 s) | 311a1c9 |", tests)
         self.assertIn("| `bash .ci/run` (`./test.sh`, then `scripts/install-check.sh`) | 534.0 s | 311a1c9 |", tests)
 
+    def test_variants_without_held_out_seeds_show_dashes_there(self):
+        lines = rows(self.table("variants"))
+        self.assertEqual(lines[0], "| variant | labels (rounds) | train s | best val loss | train, seed 0 | test, 0/1000/2000 "
+                                   "| empty_bin np8, 1–10 | test, 3000/4000/5000 | empty_bin np8, 11–20 |")
+        self.assertEqual(lines[2], "| rgb, clutter 1 (default) | 60 (60) | 42 | 0.00122 | 15/15 | 84/90 = 93.3 % | 14.2 ± 0.9 "
+                                   "| 83/90 = 92.2 % | 14.6 ± 0.5 |")
+        self.assertEqual(lines[4], "| rgbd, clutter 1 | 60 (60) | 42 | 0.00122 | 15/15 | 84/90 = 93.3 % | 14.2 ± 0.9 | – | – |")
+
     def test_failed_fault_runs_say_so(self):
         shutil.copytree(os.path.join(FIXTURES, "out"), self.out)
         fuzz = os.path.join(self.out, "faults", "fuzz.json")
