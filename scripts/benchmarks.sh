@@ -298,7 +298,7 @@ t_crop() {
 # model on train, test and empty_bin (held-out seeds too), with the vetoes and as the plain
 # argmax; the oracle with memory beside them, and the spread of test between seed sets.
 t_trials() {
-  local d=$out/trials spec tag
+  local d=$out/trials spec tag last
   local argmax=(--verify-top 0 --collision-check off) before=(--push-unverified false --verify-margin 6)
   ensure_model
   if ! [[ -f $d/run && $(cat "$d/run") == "$run_id" ]]; then
@@ -324,8 +324,10 @@ t_trials() {
     done
   done
   # The last round with the checks as they were before pushing and the 3 mm squeeze margin.
+  last=$(printf 'round_%02d' "$ROUNDS")
+  with=(--checkpoint "$d/data/improve/$last/model/best.safetensors")
   for spec in test test-heldout empty_bin-np8 empty_bin-heldout-np8; do
-    ev_in "$d/eval" "$d/data" "$tag-" "$spec" "${before[@]}"
+    ev_in "$d/eval" "$d/data" "$last-" "$spec" "${before[@]}"
   done
   with=()
   evals oracle "train-seed0 test test-heldout empty_bin-np8 empty_bin-heldout-np8"
@@ -335,7 +337,7 @@ t_trials() {
   [[ -n $SPREAD_SEEDS ]] || return 0
   with=(--checkpoint "$d/data/affordance/best.safetensors")
   ev_in "$d/eval" "$d/data" start- test-spread
-  with=(--checkpoint "$d/data/improve/$tag/model/best.safetensors")
+  with=(--checkpoint "$d/data/improve/$last/model/best.safetensors")
   ev_in "$d/eval" "$d/data" last- test-spread
   with=()
   ev oracle test-spread
