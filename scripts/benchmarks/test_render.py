@@ -135,9 +135,8 @@ class Tables(unittest.TestCase):
         self.assertIn("| SIGKILL during `train` | `scripts/kill-resume.sh` | 1 kill at 0.95 s "
                       "| 1 resumed byte-identical (1 with `--resume`) |", faults)
         soak = rows(self.table("soak"))
-        self.assertEqual(soak[0], "| check | random policy, 200 scenes | model, 20 scenes |")
-        self.assertIn("| attempts with an object more than 5 mm inside the ground or a tote | 0 of 4,730 | 0 of 298 |",
-                      soak)
+        self.assertEqual(soak[0], "| check | random policy, 2 scenes | model, 1 scenes |")
+        self.assertIn("| attempts with an object more than 5 mm inside the ground or a tote | 0 of 50 | 0 of 25 |", soak)
         tests = rows(self.table("tests"))
         self.assertIn("| … tests | 297 passed: 181 unit, 116 in the suite (181.5 s) | 311a1c9 |", tests)
         self.assertIn("| `bash .ci/run` (`./test.sh`, then `scripts/install-check.sh`) | 534.0 s | 311a1c9 |", tests)
