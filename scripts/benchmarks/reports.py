@@ -14,11 +14,22 @@ class Unfit(Exception):
     """A report a table needs is missing, unreadable, cut short or of another shape."""
 
 
+class Fields(dict):
+    """A JSON object that names its file when a table asks it for a field it lacks."""
+
+    def __init__(self, pairs, path):
+        super().__init__(pairs)
+        self.path = path
+
+    def __missing__(self, key):
+        raise Unfit(f"{self.path} has no field '{key}'")
+
+
 def read_json(path):
     """The parsed file, or `Unfit` naming it."""
     try:
         with open(path) as f:
-            return json.load(f)
+            return json.load(f, object_pairs_hook=lambda pairs: Fields(pairs, path))
     except FileNotFoundError:
         raise Unfit(f"{path} is missing") from None
     except (OSError, ValueError) as e:

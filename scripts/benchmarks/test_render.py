@@ -223,12 +223,13 @@ class Failures(unittest.TestCase):
         self.assertEqual(done.returncode, 1)
         self.assertIn("settings.json is missing", done.stderr)
 
-    def test_a_report_of_another_shape_names_the_table(self):
-        with open(os.path.join(self.out, "sweep", "oracle.json"), "w") as f:
-            json.dump({"policy": "oracle"}, f)
+    def test_a_report_without_a_field_names_the_file_and_the_field(self):
+        path = os.path.join(self.out, "sweep", "oracle.json")
+        with open(path, "w") as f:
+            json.dump({"policy": "oracle", "attempts": 15}, f)
         done = self.run_main("sweep")
         self.assertEqual(done.returncode, 1)
-        self.assertIn("render: table sweep: a report under", done.stderr)
+        self.assertEqual(done.stderr, f"render: table sweep: {path} has no field 'successes'\n")
 
 
 def report(seeds, per_seed, task="test"):
