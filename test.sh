@@ -5,9 +5,12 @@
 # missing and we are root: ffmpeg (ffprobe checks the MP4 videos), chromium and chromium-driver
 # (the browser test drives the labelling page through WebDriver), slurm-wlm and munge. All are no-ops once they are
 # there; without root the tests that need a package fail with the command that installs it.
-# slurm-wlm and munge give tests/suite/slurm.rs a real one-node Slurm (scripts/slurm/).
+# slurm-wlm and munge give tests/suite/slurm.rs a real one-node Slurm (scripts/slurm/). The
+# benchmark tables' renderer (scripts/benchmarks/) has its own unit tests, in Python, run first:
+# they take seconds and need no build.
 set -euo pipefail
 cd "$(dirname "$0")"
+python3 -m unittest discover -s scripts/benchmarks -q
 scripts/setup-libtorch.sh
 scripts/setup-system.sh ffmpeg chromium chromium-driver slurm-wlm munge
 cargo test --release --locked "$@"

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # One pick attempt per object and seed with a chosen policy, as BENCHMARKS.md reports them.
 # usage: scripts/grasp-sweep.sh oracle|random [seeds...]   (default seeds: 1 2 3)
+#   JSON=FILE  also write the counts to FILE: {"policy", "seeds", "successes", "attempts"}
 set -euo pipefail
 cd "$(dirname "$0")/.."
 policy=${1:?usage: grasp-sweep.sh oracle|random [seeds...]}
@@ -21,3 +22,7 @@ for object in $objects; do
   done
 done
 echo "$policy: $ok/$total succeeded"
+if [[ -n ${JSON:-} ]]; then
+  printf '{"policy": "%s", "seeds": [%s], "successes": %d, "attempts": %d}\n' \
+    "$policy" "$(echo "$seeds" | tr -s ' ' ',')" "$ok" "$total" >"$JSON"
+fi

@@ -8,6 +8,8 @@
 #   DATA=DIR  the data dir whose model the model scenes use (default data, as ./demo.sh leaves it)
 #   OBJECTS_DIR=DIR  the scenes' objects from DIR (--objects-dir, e.g. the public YCB meshes) and
 #     its split.json, instead of the 15 bundled ones
+#   JSON=FILE  also write the counts per policy to FILE: {"seed", "ok", "policies": {"random"|"model":
+#     {"scenes", "attempts", "panics", "no_reason", "nonfinite", "sunk"}}} (0 scenes: not run)
 # Prints each violation with the seed and attempt that reproduce it, and exits 1 if any.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -53,20 +55,26 @@ sweep() {
   python3 - "$out" "$policy" <<'PY' || failed=1
 import glob, json, sys
 out, policy = sys.argv[1], sys.argv[2]
-scenes = attempts = broken = 0
+c = dict(scenes=0, attempts=0, panics=0, no_reason=0, nonfinite=0, sunk=0)
+broken = 0
 for path in sorted(glob.glob(f"{out}/{policy}-*.json")):
     report = json.load(open(path))
     for run in report["results"]["runs"]:
-        scenes += 1
+        c["scenes"] += 1
         for a in run["attempts"]:
-            attempts += 1
+            c["attempts"] += 1
+            v = a.get("violations", [])
             if not a.get("reason"):
                 print(f"soak: seed {run['seed']} attempt {a['attempt']} ended without a reason")
-                broken += 1
-            for v in a.get("violations", []):
-                print(f"soak: seed {run['seed']} attempt {a['attempt']}: {v}")
-                broken += 1
-print(f"soak: {policy}: {scenes} scenes, {attempts} attempts, {broken} violations")
+                c["no_reason"] += 1
+            for x in v:
+                print(f"soak: seed {run['seed']} attempt {a['attempt']}: {x}")
+            broken += (not a.get("reason")) + len(v)
+            c["nonfinite"] += any("non-finite" in x for x in v)
+            c["sunk"] += any("inside the ground or a tote" in x for x in v)
+c["panics"] = sum(open(p).read().count("panicked") for p in glob.glob(f"{out}/{policy}-*.err"))
+json.dump(c, open(f"{out}/{policy}.summary.json", "w"))
+print(f"soak: {policy}: {c['scenes']} scenes, {c['attempts']} attempts, {broken} violations")
 sys.exit(1 if broken else 0)
 PY
   return $failed
@@ -79,5 +87,15 @@ if [ "$m" -gt 0 ]; then
     echo "soak: no $data/affordance/best.safetensors; run ./demo.sh first for the model scenes" >&2
     status=1
   fi
+fi
+if [ -n "${JSON:-}" ]; then
+  python3 - "$out" "$seed" "$status" "$JSON" <<'PY'
+import json, os, sys
+out, seed, status, path = sys.argv[1:]
+empty = dict(scenes=0, attempts=0, panics=0, no_reason=0, nonfinite=0, sunk=0)
+policies = {p: json.load(open(f"{out}/{p}.summary.json")) if os.path.exists(f"{out}/{p}.summary.json") else empty
+            for p in ("random", "model")}
+json.dump({"seed": int(seed), "ok": status == "0", "policies": policies}, open(path, "w"), indent=1)
+PY
 fi
 exit $status

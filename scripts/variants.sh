@@ -36,7 +36,8 @@ name_of() { # input:clutter[:per] -> rgb-c1[-p24]
   echo "$input-c$clutter${per:+-p$per}"
 }
 
-# eval DIR NAME ARGS...: one eval into DIR/eval/NAME.json.
+# eval DIR NAME ARGS...: one eval into DIR/eval/NAME.json, named for what it runs as
+# scripts/benchmarks.sh names its own (empty_bin-np8+verify-top-0).
 run_eval() {
   local dir=$1 name=$2
   shift 2
@@ -45,19 +46,19 @@ run_eval() {
 
 core_evals() {
   local dir=$1
-  run_eval "$dir" train_vt200 --task train --seeds 0
-  run_eval "$dir" test_vt200 --task test --seeds "$test_seeds"
-  run_eval "$dir" empty_np8_vt200 --task empty_bin --seeds "$empty_seeds" --n-past-action 8
+  run_eval "$dir" train-seed0 --task train --seeds 0
+  run_eval "$dir" test --task test --seeds "$test_seeds"
+  run_eval "$dir" empty_bin-np8 --task empty_bin --seeds "$empty_seeds" --n-past-action 8
 }
 
 # Most telling first: is the depth test still needed, then does suppression matter.
 extra_evals() {
   local dir=$1
-  run_eval "$dir" train_vt0 --task train --seeds 0 --verify-top 0
-  run_eval "$dir" test_vt0 --task test --seeds "$test_seeds" --verify-top 0
-  run_eval "$dir" empty_np8_vt0 --task empty_bin --seeds "$empty_seeds" --n-past-action 8 --verify-top 0
-  run_eval "$dir" empty_np0_vt200 --task empty_bin --seeds "$empty_seeds"
-  run_eval "$dir" empty_np0_vt0 --task empty_bin --seeds "$empty_seeds" --verify-top 0
+  run_eval "$dir" train-seed0+verify-top-0 --task train --seeds 0 --verify-top 0
+  run_eval "$dir" test+verify-top-0 --task test --seeds "$test_seeds" --verify-top 0
+  run_eval "$dir" empty_bin-np8+verify-top-0 --task empty_bin --seeds "$empty_seeds" --n-past-action 8 --verify-top 0
+  run_eval "$dir" empty_bin --task empty_bin --seeds "$empty_seeds"
+  run_eval "$dir" empty_bin+verify-top-0 --task empty_bin --seeds "$empty_seeds" --verify-top 0
 }
 
 for v in $variants; do
@@ -80,8 +81,8 @@ def name(v):
     parts = v.split(":")
     return f"{parts[0]}-c{parts[1]}" + (f"-p{parts[2]}" if len(parts) > 2 else "")
 def score(n):
-    t = json.load(open(f"{out}/{n}/eval/test_vt200.json"))["results"]["success"]["rate"]
-    e = json.load(open(f"{out}/{n}/eval/empty_np8_vt200.json"))["results"]["moved"]["mean"] / 15
+    t = json.load(open(f"{out}/{n}/eval/test.json"))["results"]["success"]["rate"]
+    e = json.load(open(f"{out}/{n}/eval/empty_bin-np8.json"))["results"]["moved"]["mean"] / 15
     return (t + e) / 2
 names = [name(v) for v in variants]
 print(" ".join(sorted(names, key=lambda n: -score(n))))

@@ -10,6 +10,9 @@ import math
 import os
 import sys
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "benchmarks"))
+from reports import paired_stats, per_seed  # noqa: E402  (shared with the benchmark tables)
+
 
 def name(v):
     parts = v.split(":")
@@ -24,27 +27,10 @@ def load(path):
     return None if results.get("interrupted") else results
 
 
-def per_seed(report, task):
-    """Successes (train/test) or objects moved (empty_bin) per base seed, in seed order."""
-    if report is None:
-        return None
-    seeds = report["seeds"]
-    counts = {s: 0 for s in seeds}
-    for run in report["runs"]:
-        if task == "empty_bin":
-            counts[run["seed"]] = run["bin"]["moved"]
-        else:
-            counts[run["seed"]] += sum(a["success"] for a in run["attempts"])
-    return [counts[s] for s in seeds]
-
-
-def paired(a, b):
-    """Mean and standard error of the per-seed differences a − b."""
-    d = [x - y for x, y in zip(a, b)]
-    n = len(d)
-    mean = sum(d) / n
-    sd = math.sqrt(sum((x - mean) ** 2 for x in d) / (n - 1)) if n > 1 else 0.0
-    return mean, sd / math.sqrt(n)
+# Each row key (the summary's) and the file variants.sh writes it to, named for what it runs.
+FILES = {"train_vt200": "train-seed0", "train_vt0": "train-seed0+verify-top-0", "test_vt200": "test",
+         "test_vt0": "test+verify-top-0", "empty_np8_vt200": "empty_bin-np8", "empty_np0_vt200": "empty_bin",
+         "empty_np8_vt0": "empty_bin-np8+verify-top-0", "empty_np0_vt0": "empty_bin+verify-top-0"}
 
 
 def main():
@@ -52,7 +38,7 @@ def main():
     # A variant that has not been trained yet (a run stopped early) is left out.
     variants = [v for v in variants if os.path.exists(f"{out}/{name(v)}/train.json")]
     names = [name(v) for v in variants]
-    rows = {}
+    rows, reports = {}, {}
     for v, n in zip(variants, names):
         d = f"{out}/{n}"
         train = load(f"{d}/train.json")
@@ -65,13 +51,10 @@ def main():
             "train_seconds": train["wall_seconds"],
             "best_val_loss": train["best_val_loss"],
         }
-        for key, task in [
-            ("train_vt200", "train"), ("train_vt0", "train"),
-            ("test_vt200", "test"), ("test_vt0", "test"),
-            ("empty_np8_vt200", "empty_bin"), ("empty_np0_vt200", "empty_bin"),
-            ("empty_np8_vt0", "empty_bin"), ("empty_np0_vt0", "empty_bin"),
-        ]:
-            row[key] = per_seed(load(f"{d}/eval/{key}.json"), task)
+        for key, file in FILES.items():
+            report = load(f"{d}/eval/{file}.json")
+            row[key] = None if report is None else per_seed(report)
+            reports[(n, key)] = report
         rows[n] = row
 
     base = rows[names[0]]
@@ -81,8 +64,8 @@ def main():
         if any(r[k] is None or base[k] is None for k in core):
             r["rule"] = None
             continue
-        test = paired(r["test_vt200"], base["test_vt200"])
-        empty = paired(r["empty_np8_vt200"], base["empty_np8_vt200"])
+        test = paired_stats(reports[(n, "test_vt200")], reports[(names[0], "test_vt200")])
+        empty = paired_stats(reports[(n, "empty_np8_vt200")], reports[(names[0], "empty_np8_vt200")])
         r["rule"] = {
             "test_diff_mean": test[0], "test_diff_se": test[1],
             "test_beats": test[0] > test[1] and test[0] > 0,

@@ -158,6 +158,9 @@ pub(crate) struct EvalResults {
     pub(crate) interrupted: bool,
     /// The episode video that `--record` wrote, as given.
     pub(crate) video: Option<PathBuf>,
+    /// Seconds spent encoding and writing that video (absent without `--record`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) video_encode_s: Option<f64>,
     /// The folder of the per-attempt visualisations, when the policy drew any.
     pub(crate) vis_dir: Option<PathBuf>,
 }
@@ -361,6 +364,7 @@ pub(crate) fn summarise(
         runs,
         interrupted,
         video: None,
+        video_encode_s: None,
         vis_dir: None,
     }
 }

@@ -78,9 +78,11 @@ fn an_mp4_episode_is_h264_with_every_frame_of_the_gif_and_repeats_byte_for_byte(
         "same episode, other bytes"
     );
     assert!(bytes.len() < std::fs::metadata(&gif).unwrap().len() as usize / 4);
-    // The kept report says where the video went.
+    // The kept report says where the video went, and how long encoding and writing it took.
     let kept = crate::eval::read_json(&crate::common::kept_report(&recorded));
     assert_eq!(kept["results"]["video"], again.to_str().unwrap());
+    let encoding = kept["results"]["video_encode_s"].as_f64().unwrap();
+    assert!(encoding > 0.0 && encoding < 60.0, "{encoding} s");
 }
 
 #[test]

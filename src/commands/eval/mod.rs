@@ -153,20 +153,28 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
             interrupted,
         ));
     }
+    let mut video_encode_s = None;
     if let (Some(path), Some(frames)) = (&config.record, &recording) {
+        let encoding = Instant::now();
         save_video_atomic(frames, EPISODE_EVERY_STEPS, path)
             .with_context(|| format!("writing --record {}", path.display()))?;
+        video_encode_s = Some(encoding.elapsed().as_secs_f64());
         context.say(&format!("wrote the episode video to {}", path.display()));
     }
-    finish(
-        context,
-        &config,
-        &names,
-        runs,
+    let ran = Ran {
         start,
         workers,
-        &evaluation.vis_dir,
-    )
+        video_encode_s,
+    };
+    finish(context, &config, &names, runs, ran, &evaluation.vis_dir)
+}
+
+/// How a finished evaluation ran, beside its scenes.
+struct Ran {
+    start: Instant,
+    workers: usize,
+    /// Seconds spent encoding and writing the --record video.
+    video_encode_s: Option<f64>,
 }
 
 /// The evaluation's seeds, objects and outputs, each checked before anything runs, and its
@@ -259,8 +267,7 @@ fn finish(
     config: &EvalConfig,
     names: &[String],
     runs: Vec<SceneRun>,
-    start: Instant,
-    workers: usize,
+    ran: Ran,
     vis_dir: &Path,
 ) -> anyhow::Result<()> {
     let drew = runs
@@ -273,11 +280,12 @@ fn finish(
         config.run_seeds(),
         names,
         runs,
-        start.elapsed().as_secs_f64(),
+        ran.start.elapsed().as_secs_f64(),
         false,
     );
-    results.timing.workers = workers;
+    results.timing.workers = ran.workers;
     results.video = config.record.clone();
+    results.video_encode_s = ran.video_encode_s;
     results.vis_dir = drew.then(|| vis_dir.to_path_buf());
     for line in report_lines(&results, config.suppression.remember) {
         context.say(&line);
