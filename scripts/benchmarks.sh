@@ -111,22 +111,8 @@ fi
 timed() { helper timed "$@"; }
 
 # eval_name BASE [FLAGS...]: the file name of an evaluation, its flags spelt out after BASE:
-# `eval_name model-test --verify-top 0 --centring` is model-test+verify-top-0+centring. A flag's
-# value that is a path is left out. scripts/benchmarks/reports.py's eval_name builds the same.
-eval_name() {
-  local name=$1 piece
-  shift
-  while [[ $# -gt 0 ]]; do
-    piece=${1#--}
-    shift
-    if [[ $# -gt 0 && $1 != --* ]]; then
-      [[ $1 == */* ]] || piece+=-$1
-      shift
-    fi
-    name+=+$piece
-  done
-  echo "$name"
-}
+# `eval_name model-test --verify-top 0 --centring` is model-test+verify-top-0+centring.
+eval_name() { helper eval-name "$@"; }
 
 # eval_into FILE DATA ARGS...: one `graspmap eval` into FILE (once per invocation).
 eval_into() {

@@ -10,6 +10,7 @@ Usage: python3 scripts/benchmarks/helpers.py COMMAND ARGS...
   epoch-seconds CSV FILE       a training run's losses.csv: seconds per epoch
   file-size PATH FILE          the size of PATH, in ffprobe's shape (no ffprobe here)
   skip FILE REASON...          a run that does not apply here, and why
+  eval-name BASE ARGS...       the file name of an evaluation: BASE, then ARGS' flags spelt out
   settings OUT QUICK KEY...     OUT/machine.txt, and OUT/settings.json: the machine, commit, mode
                                and each KEY's value from the environment
 """
@@ -22,6 +23,8 @@ import resource
 import subprocess
 import sys
 import time
+
+import reports
 
 
 def write(path, data):
@@ -159,7 +162,20 @@ def settings(out, quick, *keys):
     return 0
 
 
-COMMANDS = {"timed": timed, "shards": shards, "slurm": slurm, "cargo-test": cargo_test,
+def eval_name(base, *words):
+    """Groups a command line's words into flags (a flag, then its value when one follows) for
+    reports.eval_name, the one place that spells an evaluation's file name."""
+    flags = []
+    for word in words:
+        if word.startswith("--") or not flags:
+            flags.append(word)
+        else:
+            flags[-1] += " " + word
+    print(reports.eval_name(base, *flags))
+    return 0
+
+
+COMMANDS = {"timed": timed, "eval-name": eval_name, "shards": shards, "slurm": slurm, "cargo-test": cargo_test,
             "epoch-seconds": epoch_seconds, "file-size": file_size, "skip": skip, "settings": settings}
 
 if __name__ == "__main__":

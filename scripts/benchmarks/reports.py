@@ -65,7 +65,7 @@ def skipped(path):
 def eval_name(base, *flags):
     """The file an evaluation is stored under: its base name, then each extra flag spelt out.
 
-    scripts/benchmarks.sh's `eval_name` builds the same: ("model-test", "--verify-top 0") is
+    scripts/benchmarks.sh names its runs through this too: ("model-test", "--verify-top 0") is
     model-test+verify-top-0; a flag whose value is a path keeps only its name.
     """
     parts = [base]

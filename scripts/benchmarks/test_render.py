@@ -284,15 +284,15 @@ class Cells(unittest.TestCase):
         self.assertAlmostEqual(s["wilson_high"], centre + half, places=6)
 
     def test_eval_names_match_the_runner(self):
-        """benchmarks.sh and render.py spell an evaluation's flags into its file name alike."""
-        script = os.path.join(ROOT, "scripts", "benchmarks.sh")
+        """benchmarks.sh's words and render.py's flags spell an evaluation's file name alike."""
+        helpers = os.path.join(ROOT, "scripts", "benchmarks", "helpers.py")
         args = ["model-test", "--verify-top", "0", "--objects-dir", "/some/meshes", "--centring",
                 "--verify-floor", "0.25"]
-        bash = subprocess.run(["bash", "-c", f"eval \"$(sed -n '/^eval_name() {{/,/^}}/p' {script})\"; "
-                               'eval_name "$@"', "eval_name", *args], capture_output=True, text=True, check=True)
+        runner = subprocess.run([sys.executable, helpers, "eval-name", *args], capture_output=True, text=True,
+                                check=True)
         python = render.eval_name("model-test", "--verify-top 0", "--objects-dir /some/meshes", "--centring",
                                   "--verify-floor 0.25")
-        self.assertEqual(bash.stdout.strip(), python)
+        self.assertEqual(runner.stdout.strip(), python)
         self.assertEqual(python, "model-test+verify-top-0+objects-dir+centring+verify-floor-0.25")
 
 
