@@ -18,6 +18,7 @@ pub mod labels;
 pub mod lock;
 pub(crate) mod observation;
 pub(crate) mod output;
+pub(crate) mod progress;
 pub(crate) mod relabel;
 pub mod shard;
 pub mod trials;

@@ -11,8 +11,9 @@ use std::path::{Path, PathBuf};
 use anyhow::{bail, Context};
 
 use super::atomic::write_atomic;
-use super::labels::{LabelStore, Labels, Progress, LABELS_FILE, PROGRESS_FILE};
+use super::labels::{LabelStore, Labels, LABELS_FILE};
 use super::lock::LOCK_FILE;
+use super::progress::{Progress, PROGRESS_FILE};
 
 /// For the crash tests: `GRASPMAP_TEST_ABORT_DELETE=N` aborts the process at step N of a
 /// delete (1: staging made, 2: files linked, 3: labels.json written, 4: progress.json written,

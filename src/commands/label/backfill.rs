@@ -11,8 +11,9 @@ use anyhow::{bail, Context as _};
 
 use super::rounds::{round_scene, round_seed};
 use crate::commands::Context;
-use crate::data::labels::{LabelStore, PROGRESS_FILE};
+use crate::data::labels::LabelStore;
 use crate::data::lock::StoreLock;
+use crate::data::progress::PROGRESS_FILE;
 
 /// Runs the backfill; returns the number of depth files written.
 pub(super) fn backfill_depth(context: &Context, store: &LabelStore) -> anyhow::Result<usize> {

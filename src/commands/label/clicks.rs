@@ -12,7 +12,8 @@ use rand_distr::{Distribution, Normal};
 
 use super::config::LabelConfig;
 use crate::data::atomic::save_image_atomic;
-use crate::data::labels::{Label, Labels, Progress};
+use crate::data::labels::{Label, Labels};
+use crate::data::progress::Progress;
 use crate::grasp::draw::draw_grasp;
 use crate::grasp::{normalize_angle, PixelGrasp, BIN_DEG, IMAGE_SIZE};
 use crate::policy::oracle;

@@ -7,7 +7,8 @@ use super::clicks::{check_enough_clicks, Clicker};
 use super::config::LabelConfig;
 use crate::commands::Context;
 use crate::data::depth_files::check_depth_files;
-use crate::data::labels::{LabelStore, Labels, Progress};
+use crate::data::labels::{LabelStore, Labels};
+use crate::data::progress::Progress;
 use crate::named::counted;
 use crate::present::envelope::write_report;
 
@@ -62,7 +63,7 @@ pub(super) fn writes_depth(store: &LabelStore, labels: &Labels) -> bool {
 /// does not parse, another schema, or label counts that differ by more than the one label a
 /// kill between the two writes leaves uncounted.
 fn progress_problems(store: &LabelStore) -> Vec<String> {
-    let path = store.dir().join(crate::data::labels::PROGRESS_FILE);
+    let path = store.dir().join(crate::data::progress::PROGRESS_FILE);
     let progress = match store.load_progress() {
         Ok(Some(progress)) => progress,
         Ok(None) => return Vec::new(),
@@ -137,7 +138,7 @@ fn resume_point(
             "{} has schema '{}', expected '{}' (rerun with --force to start over)",
             store
                 .dir()
-                .join(crate::data::labels::PROGRESS_FILE)
+                .join(crate::data::progress::PROGRESS_FILE)
                 .display(),
             progress.schema,
             Progress::SCHEMA

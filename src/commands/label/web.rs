@@ -5,7 +5,8 @@ use std::sync::Mutex;
 
 use super::{labels_in, lock, ObjectJob, ObjectSummary, Shared};
 use crate::assets::objects::ObjectModel;
-use crate::data::labels::{LabelStore, Labels, Progress};
+use crate::data::labels::{LabelStore, Labels};
+use crate::data::progress::Progress;
 use crate::interrupt;
 use crate::present::web::labels_page::{self, LabelsAccess};
 use crate::present::web::report_route::ReportRoute;

@@ -2,7 +2,8 @@
 //! the delete that renumbers an object's labels (the reference's way to relabel).
 
 use super::{Reply, Request};
-use crate::data::labels::{Label, LabelStore, Labels, Progress};
+use crate::data::labels::{Label, LabelStore, Labels};
+use crate::data::progress::Progress;
 use crate::grasp::draw::draw_grasp;
 use crate::grasp::PixelGrasp;
 
