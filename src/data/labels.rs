@@ -10,7 +10,7 @@ use anyhow::Context;
 use serde::Serialize;
 
 use super::atomic::{save_image_atomic, write_atomic};
-use super::progress::PROGRESS_FILE;
+use super::progress::{Progress, PROGRESS_FILE};
 use crate::grasp::{PixelGrasp, IMAGE_SIZE};
 
 /// The labels file name inside the labels directory.
@@ -443,6 +443,18 @@ fn image_problem(path: &Path) -> Option<String> {
         ));
     }
     None
+}
+
+impl LabelStore {
+    /// Reads progress.json, if any.
+    pub(crate) fn load_progress(&self) -> anyhow::Result<Option<Progress>> {
+        Progress::load(&self.dir)
+    }
+
+    /// Writes progress.json atomically.
+    pub(crate) fn save_progress(&self, progress: &Progress) -> anyhow::Result<()> {
+        progress.save(&self.dir)
+    }
 }
 
 #[cfg(test)]

@@ -7,7 +7,6 @@ use std::path::Path;
 use anyhow::Context;
 
 use super::atomic::write_atomic;
-use super::labels::LabelStore;
 
 /// Where labelling stands per object, so that a rerun continues from the right round.
 pub(crate) const PROGRESS_FILE: &str = "progress.json";
@@ -155,22 +154,22 @@ impl Progress {
     }
 }
 
-impl LabelStore {
-    /// Reads progress.json, if any.
-    pub(crate) fn load_progress(&self) -> anyhow::Result<Option<Progress>> {
-        let path = self.dir().join(PROGRESS_FILE);
+impl Progress {
+    /// Reads `labels_dir`'s progress.json, if any.
+    pub(crate) fn load(labels_dir: &Path) -> anyhow::Result<Option<Self>> {
+        let path = labels_dir.join(PROGRESS_FILE);
         match std::fs::read_to_string(&path) {
-            Ok(text) => Ok(Some(Progress::parse(&text, &path)?)),
+            Ok(text) => Ok(Some(Self::parse(&text, &path)?)),
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(None),
             Err(e) => Err(e).with_context(|| format!("reading {}", path.display())),
         }
     }
 
-    /// Writes progress.json atomically.
-    pub(crate) fn save_progress(&self, progress: &Progress) -> anyhow::Result<()> {
-        let mut text = serde_json::to_vec_pretty(progress)?;
+    /// Writes `labels_dir`'s progress.json atomically.
+    pub(crate) fn save(&self, labels_dir: &Path) -> anyhow::Result<()> {
+        let mut text = serde_json::to_vec_pretty(self)?;
         text.write_all(b"\n")?;
-        write_atomic(&self.dir().join(PROGRESS_FILE), &text)
+        write_atomic(&labels_dir.join(PROGRESS_FILE), &text)
     }
 }
 
