@@ -26,7 +26,7 @@ use clap::{Args, Parser, Subcommand};
 
 use crate::commands;
 use crate::commands::bench::{BenchConfig, PeerPython};
-use crate::commands::scene::SceneConfig;
+use crate::commands::scene::{SceneConfig, SceneSource};
 use crate::commands::Context;
 use crate::data::input::InputKind;
 use crate::model::config::TrainConfig;
@@ -262,11 +262,19 @@ pub(crate) struct LabelArgs {
 #[derive(Debug, Args)]
 pub(crate) struct SceneArgs {
     /// Comma-separated object names, dropped in this order.
-    #[arg(long, value_delimiter = ',', required = true, num_args = 1..)]
+    #[arg(long, value_delimiter = ',', required_unless_present = "load", num_args = 1..)]
     pub(crate) objects: Vec<String>,
     /// Seed of the drop poses.
-    #[arg(long, default_value_t = 0)]
+    #[arg(long, default_value_t = 0, conflicts_with = "load")]
     pub(crate) seed: u64,
+    /// Place the objects as this scene file lists them instead of dropping them: graspmap's
+    /// JSON (as --save writes it) or one of VPG's test cases (docs/scenes.md).
+    #[arg(long, value_name = "FILE", conflicts_with = "objects")]
+    pub(crate) load: Option<PathBuf>,
+    /// Also write the settled scene as a scene file (graspmap's JSON), which --load and
+    /// `eval --task scenes --scenes FILE` replay; --out then shows the scene as replayed.
+    #[arg(long, value_name = "FILE")]
+    pub(crate) save: Option<PathBuf>,
     /// Output RGB image (.png).
     #[arg(long, value_name = "PNG")]
     pub(crate) out: PathBuf,
@@ -468,10 +476,16 @@ fn dispatch(context: &Context, command: Command, given: &Given) -> anyhow::Resul
 /// `graspmap scene`.
 fn scene(context: &Context, args: SceneArgs) -> anyhow::Result<()> {
     let config = SceneConfig {
-        objects: args.objects,
-        seed: args.seed,
+        source: match args.load {
+            Some(file) => SceneSource::Load(file),
+            None => SceneSource::Drop {
+                objects: args.objects,
+                seed: args.seed,
+            },
+        },
         out: args.out,
         depth: args.depth,
+        save: args.save,
     };
     outputs::scene(context, &config, args.force).check()?;
     commands::scene::run(context, config)

@@ -16,7 +16,7 @@ use crate::commands::label::{ClickSource, LabelConfig};
 use crate::commands::merge::MergeConfig;
 use crate::commands::predict::PredictConfig;
 use crate::commands::report::ReportConfig;
-use crate::commands::scene::SceneConfig;
+use crate::commands::scene::{SceneConfig, SceneSource};
 use crate::commands::train::TrainOptions;
 use crate::commands::Context;
 use crate::data::output::{identity, Existing, Kind, RunFiles};
@@ -43,6 +43,10 @@ pub(super) fn scene(context: &Context, config: &SceneConfig, force: bool) -> Run
     let mut files = base(context, Some(force));
     files.output(Some(&config.out), "--out", Existing::Force);
     files.output(config.depth.as_deref(), "--depth", Existing::Force);
+    files.output(config.save.as_deref(), "--save", Existing::Force);
+    if let SceneSource::Load(file) = &config.source {
+        files.input("the --load scene file this command reads", Some(file));
+    }
     files
 }
 

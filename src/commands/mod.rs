@@ -1,5 +1,6 @@
 //! Commands: each orchestrates the core, the objects and the simulator, and owns all printing.
 
+mod arranged;
 mod attempt;
 pub(crate) mod bench;
 pub(crate) mod collect;

@@ -3,6 +3,7 @@
 //! Everything here uses rapier's own math types (glam, f32); the closed-form IK in
 //! `kinematics` works in nalgebra f64 and is converted at its call sites in `pick`.
 
+mod arrange;
 mod guard;
 mod invariants;
 pub(crate) mod kinematics;
