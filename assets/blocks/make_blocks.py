@@ -100,10 +100,21 @@ def groove_pieces():
     return pieces
 
 
-def box_faces(count):
-    """Faces of a convex hull given by its corner points: left to the loader, which takes each
-    `o` piece's points as a convex hull; one triangle per piece keeps the OBJ valid."""
-    return [(1, 2, 3)] if count >= 3 else []
+def hexahedron_faces(first):
+    """The 12 triangles of a hexahedron whose 8 corners are numbered 4·i + 2·j + k from
+    `first` (i, j, k in {0, 1}), as every piece of groove_pieces() is: the loader keeps only
+    the vertices that faces use."""
+    corner = lambda i, j, k: first + 4 * i + 2 * j + k
+    quads = []
+    for fixed in range(3):
+        for side in (0, 1):
+            quad = []
+            for a, b in ((0, 0), (0, 1), (1, 1), (1, 0)):
+                ijk = [a, b]
+                ijk.insert(fixed, side)
+                quad.append(corner(*ijk))
+            quads.append(quad)
+    return [f"f {q[0]} {q[1]} {q[2]}\nf {q[0]} {q[2]} {q[3]}" for q in quads]
 
 
 def main(source):
@@ -131,7 +142,7 @@ def main(source):
             for n, piece in enumerate(groove_pieces()):
                 lines.append(f"o piece_{n}")
                 lines += [fmt(reframe(*p)) for p in piece]
-                lines += [f"f {first} {first + 1} {first + 2}", f"f {first + 1} {first + 3} {first + 2}"]
+                lines += hexahedron_faces(first)
                 first += len(piece)
             (folder / "collision.obj").write_text("\n".join(lines) + "\n")
         mass = DENSITY * volume(vertices, faces)

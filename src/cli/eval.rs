@@ -27,6 +27,10 @@ pub(crate) struct EvalArgs {
     /// Who chooses the grasps.
     #[arg(long, value_parser = named::<PolicyKind>(), default_value = "model")]
     pub(crate) policy: PolicyKind,
+    /// --task scenes: scene files, or folders of them: graspmap's JSON (`scene --save`) or VPG's
+    /// test cases (.txt, which place VPG's blocks: add --objects-dir assets/blocks).
+    #[arg(long, value_name = "PATH", num_args = 1..)]
+    pub(crate) scenes: Vec<PathBuf>,
     /// Model weights [default: DATA/affordance/best.safetensors].
     #[arg(long, value_name = "PATH")]
     pub(crate) checkpoint: Option<PathBuf>,
@@ -103,10 +107,12 @@ pub(crate) struct EvalArgs {
     /// empty_bin: most pick attempts per scene.
     #[arg(long, default_value_t = DEFAULT_MAX_ATTEMPTS, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) max_attempts: u32,
-    /// empty_bin: end a scene after K failed attempts in a row, as a robot that declares the
-    /// bin done (0 = never: the reference's fixed budget of --max-attempts).
-    #[arg(long, value_name = "K", default_value_t = 0)]
-    pub(crate) give_up_after: u32,
+    /// empty_bin, scenes: end a scene after K failed actions in a row (a grasp that held
+    /// nothing, a push that moved nothing), as a robot that declares the bin done; 0 = never
+    /// [default: empty_bin 0, the reference's fixed budget of --max-attempts; scenes 11, VPG's
+    /// "more than 10"].
+    #[arg(long, value_name = "K")]
+    pub(crate) give_up_after: Option<u32>,
     /// Model policy: where no grasp passes verification, push the object under the best one
     /// off its neighbours instead of executing that grasp; an attempt, not a grasp
     /// (docs/evaluation.md, "Pushing"). Default: true in empty_bin, false in train and test,

@@ -13,7 +13,7 @@ use super::{
 };
 use crate::assets::objects::{ObjectLibrary, SplitFile};
 use crate::commands::collect::{CollectConfig, CollectPolicy};
-use crate::commands::eval::{pushes_by_default, EvalConfig};
+use crate::commands::eval::{give_up_by_default, pushes_by_default, EvalConfig};
 use crate::commands::grasp::{GraspChoice, GraspConfig};
 use crate::commands::improve::ImproveConfig;
 use crate::commands::label::{ClickNoise, ClickSource, LabelConfig};
@@ -109,8 +109,20 @@ impl EvalArgs {
     fn refuse_inapplicable(&self, given: &Given) -> anyhow::Result<()> {
         let task = format!("--task {}", self.task.name());
         let policy = format!("--policy {}", self.policy.name());
-        if self.task != Task::EmptyBin {
-            refuse_inapplicable(given, EMPTY_BIN_ONLY, "--task empty_bin", &task)?;
+        if !self.task.clears_a_bin() {
+            refuse_inapplicable(given, EMPTY_BIN_ONLY, "--task empty_bin or scenes", &task)?;
+        }
+        match (self.task, self.scenes.is_empty()) {
+            (Task::Scenes, true) => bail!(
+                "--task scenes needs --scenes PATH…: scene files (graspmap's JSON or VPG's test cases) or folders of them"
+            ),
+            (Task::Scenes, false) if self.shard.is_some() || self.resume => bail!(
+                "--task scenes runs each scene file whole: drop --shard and --resume"
+            ),
+            (Task::Train | Task::Test | Task::EmptyBin, false) => {
+                bail!("--scenes is read by --task scenes only, not {task}")
+            }
+            _ => {}
         }
         if self.policy != PolicyKind::Model {
             refuse_inapplicable(given, EVAL_MODEL_ONLY, "--policy model", &policy)?;
@@ -155,6 +167,7 @@ impl EvalArgs {
             checkpoint: checkpoint_path(data, self.checkpoint),
             precision: self.precision.resolve(),
             seeds,
+            scenes: self.scenes,
             suppression: SuppressionConfig {
                 remember: self.n_past_action,
                 sigma_px: self.suppression_sigma,
@@ -164,7 +177,7 @@ impl EvalArgs {
             },
             model,
             max_attempts: self.max_attempts,
-            give_up_after: self.give_up_after,
+            give_up_after: self.give_up_after.unwrap_or(give_up_by_default(self.task)),
             push_unverified: self.push_unverified.unwrap_or(pushes_by_default(self.task)),
             record: self.record,
             resume: self.resume,

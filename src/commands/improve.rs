@@ -269,6 +269,7 @@ fn evaluate(
         checkpoint: model.to_path_buf(),
         precision,
         seeds: seeds.to_vec(),
+        scenes: Vec::new(),
         suppression: SuppressionConfig {
             remember: 8,
             ..SuppressionConfig::default()

@@ -30,6 +30,8 @@ named_enum! {
         Test = "test", "each test (unseen) object alone, 3 attempts each",
         /// All 15 objects in bin 1 at once; move as many as possible to bin 2.
         EmptyBin = "empty_bin", "all 15 objects in bin 1 at once; move as many as possible to bin 2",
+        /// Scene files placed as listed (--scenes), each cleared as in empty_bin; VPG's metrics.
+        Scenes = "scenes", "scene files placed as listed (--scenes), each cleared as in empty_bin; VPG's metrics",
     }
 }
 
@@ -38,8 +40,14 @@ impl Task {
     pub(crate) fn default_seed(self) -> u64 {
         match self {
             Task::EmptyBin => DEFAULT_EMPTY_BIN_SEED,
-            Task::Train | Task::Test => 0,
+            Task::Train | Task::Test | Task::Scenes => 0,
         }
+    }
+
+    /// Whether a run clears a bin of several objects (empty_bin, scenes), rather than picking
+    /// one object alone per attempt.
+    pub(crate) fn clears_a_bin(self) -> bool {
+        matches!(self, Task::EmptyBin | Task::Scenes)
     }
 }
 
@@ -92,11 +100,64 @@ pub(crate) struct AttemptRecord {
     pub(crate) moved: Option<usize>,
     /// Where the visualisation went.
     pub(crate) vis: Option<PathBuf>,
+    /// A push: where it went and what it moved (absent for grasps).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) push: Option<PushRecord>,
     /// Where the time went.
     pub(crate) timing: AttemptTiming,
     /// Physics invariants broken during the attempt (with `--check-invariants` only).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(crate) violations: Vec<String>,
+}
+
+/// A push as executed, and what it moved.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub(crate) struct PushRecord {
+    /// Start of the stroke (world x, y, m).
+    pub(crate) start: [f32; 2],
+    /// Its end.
+    pub(crate) end: [f32; 2],
+    /// Each object that moved more than a few millimetres, with how far (mm), farthest first.
+    pub(crate) moved: Vec<(String, f32)>,
+}
+
+impl PushRecord {
+    /// Whether the push changed the scene, as VPG's give-up rule asks: some object moved.
+    pub(crate) fn changed_the_scene(&self) -> bool {
+        !self.moved.is_empty()
+    }
+
+    /// "moved Block4 42 mm, Block6 9 mm", or "moved nothing".
+    pub(crate) fn describe(&self) -> String {
+        match self.moved.is_empty() {
+            true => "moved nothing".to_owned(),
+            false => format!(
+                "moved {}",
+                self.moved
+                    .iter()
+                    .map(|(name, mm)| format!("{name} {mm:.0} mm"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        }
+    }
+}
+
+impl AttemptRecord {
+    /// Whether the attempt counts as a failed action in VPG's give-up rule: a grasp that held
+    /// nothing, or a push that moved nothing.
+    pub(crate) fn failed_action(&self) -> bool {
+        !self.success
+            && !self
+                .push
+                .as_ref()
+                .is_some_and(PushRecord::changed_the_scene)
+    }
+
+    /// Whether the attempt was a grasp (VPG's metrics count pushes as actions, not grasps).
+    pub(crate) fn is_grasp(&self) -> bool {
+        self.reason != PickReason::Pushed
+    }
 }
 
 /// empty_bin: where each object ended up.
@@ -119,12 +180,91 @@ pub(crate) struct BinOutcome {
 /// One scene seed's run.
 #[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub(crate) struct SceneRun {
+    /// scenes: the scene file's name (its stem).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(crate) scene: Option<String>,
     /// The base seed.
     pub(crate) seed: u64,
     /// Every attempt, in order.
     pub(crate) attempts: Vec<AttemptRecord>,
-    /// empty_bin only.
+    /// empty_bin and scenes.
     pub(crate) bin: Option<BinOutcome>,
+}
+
+/// VPG's metrics of one case (scene file) or of their mean, as its evaluate.py computes them.
+#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
+pub(crate) struct CaseMetrics {
+    /// The scene's name, or "mean" over the cases.
+    pub(crate) scene: String,
+    /// Runs (seeds) of the case.
+    pub(crate) runs: usize,
+    /// Runs that moved every placed object before giving up.
+    pub(crate) completed: usize,
+    /// completed / runs.
+    pub(crate) completion: f64,
+    /// Successful grasps / grasp attempts of each completed run, averaged over completed runs
+    /// (`None` when no run completed).
+    pub(crate) grasp_success: Option<f64>,
+    /// Objects / actions (pushes too) of each completed run, averaged.
+    pub(crate) action_efficiency: Option<f64>,
+    /// Grasps / actions of each completed run, averaged.
+    pub(crate) grasp_share: Option<f64>,
+}
+
+impl CaseMetrics {
+    /// The metrics of one case's runs.
+    pub(crate) fn of(scene: &str, runs: &[&SceneRun]) -> Self {
+        let completed: Vec<&&SceneRun> = runs
+            .iter()
+            .filter(|r| {
+                r.bin
+                    .as_ref()
+                    .is_some_and(|b| b.left == 0 && b.lost == 0 && !b.locations.is_empty())
+            })
+            .collect();
+        let mean = |f: &dyn Fn(&SceneRun) -> f64| {
+            (!completed.is_empty())
+                .then(|| completed.iter().map(|r| f(r)).sum::<f64>() / completed.len() as f64)
+        };
+        let actions = |r: &SceneRun| r.attempts.len().max(1) as f64;
+        let grasps = |r: &SceneRun| r.attempts.iter().filter(|a| a.is_grasp()).count() as f64;
+        Self {
+            scene: scene.to_owned(),
+            runs: runs.len(),
+            completed: completed.len(),
+            completion: completed.len() as f64 / runs.len().max(1) as f64,
+            grasp_success: mean(&|r| {
+                let held = r
+                    .attempts
+                    .iter()
+                    .filter(|a| a.is_grasp() && a.success)
+                    .count();
+                held as f64 / grasps(r).max(1.0)
+            }),
+            action_efficiency: mean(&|r| {
+                r.bin.as_ref().map_or(0, |b| b.locations.len()) as f64 / actions(r)
+            }),
+            grasp_share: mean(&|r| grasps(r) / actions(r)),
+        }
+    }
+
+    /// The mean of each metric over `cases` (each case weighs the same, as in VPG's tables);
+    /// a metric no case has stays `None`.
+    pub(crate) fn mean(cases: &[CaseMetrics]) -> Self {
+        let of = |f: fn(&CaseMetrics) -> Option<f64>| {
+            let values: Vec<f64> = cases.iter().filter_map(f).collect();
+            (!values.is_empty()).then(|| values.iter().sum::<f64>() / values.len() as f64)
+        };
+        Self {
+            scene: "mean".to_owned(),
+            runs: cases.iter().map(|c| c.runs).sum(),
+            completed: cases.iter().map(|c| c.completed).sum(),
+            completion: of(|c| Some(c.completion)).unwrap_or(0.0),
+            grasp_success: of(|c| c.grasp_success),
+            action_efficiency: of(|c| c.action_efficiency),
+            grasp_share: of(|c| c.grasp_share),
+        }
+    }
 }
 
 /// Everything `eval --json` reports, and what `report` reads back (the fields that schema
@@ -148,6 +288,9 @@ pub(crate) struct EvalResults {
     pub(crate) left: Option<Spread>,
     /// empty_bin: objects lost per scene.
     pub(crate) lost: Option<Spread>,
+    /// scenes: VPG's metrics per scene file, then their mean.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(crate) cases: Vec<CaseMetrics>,
     /// Every scene and attempt.
     pub(crate) runs: Vec<SceneRun>,
     /// Where the time went.
@@ -307,7 +450,7 @@ pub(crate) fn summarise(
         .iter()
         .filter(|a| a.reason != PickReason::Pushed)
         .count();
-    let per_object = if task == Task::EmptyBin {
+    let per_object = if task.clears_a_bin() {
         Vec::new()
     } else {
         names
@@ -328,7 +471,7 @@ pub(crate) fn summarise(
             .collect()
     };
     let spread_of = |f: fn(&BinOutcome) -> usize| {
-        (task == Task::EmptyBin).then(|| {
+        task.clears_a_bin().then(|| {
             let values: Vec<f64> = runs
                 .iter()
                 .filter_map(|r| r.bin.as_ref())
@@ -340,7 +483,12 @@ pub(crate) fn summarise(
     let n = all.len().max(1) as f64;
     let mean_of = |f: fn(&AttemptTiming) -> f64| all.iter().map(|a| f(&a.timing)).sum::<f64>() / n;
     let walls: Vec<f64> = all.iter().map(|a| a.timing.wall).collect();
+    let cases = match task {
+        Task::Scenes => case_metrics(&runs),
+        _ => Vec::new(),
+    };
     EvalResults {
+        cases,
         task,
         policy,
         seeds,
@@ -367,6 +515,31 @@ pub(crate) fn summarise(
         video_encode_s: None,
         vis_dir: None,
     }
+}
+
+/// VPG's metrics of each scene in the order first run, then their mean.
+fn case_metrics(runs: &[SceneRun]) -> Vec<CaseMetrics> {
+    let mut names: Vec<&str> = Vec::new();
+    for run in runs {
+        let name = run.scene.as_deref().unwrap_or("");
+        if !names.contains(&name) {
+            names.push(name);
+        }
+    }
+    let mut cases: Vec<CaseMetrics> = names
+        .iter()
+        .map(|&name| {
+            let mine: Vec<&SceneRun> = runs
+                .iter()
+                .filter(|r| r.scene.as_deref().unwrap_or("") == name)
+                .collect();
+            CaseMetrics::of(name, &mine)
+        })
+        .collect();
+    if !cases.is_empty() {
+        cases.push(CaseMetrics::mean(&cases));
+    }
+    cases
 }
 
 /// Per-object line of the train/test table.
@@ -410,14 +583,99 @@ pub(crate) fn report_lines(results: &EvalResults, n_past_action: usize) -> Vec<S
     let mut lines = vec![format!(
         "eval --task {task}, policy {policy}, seed {seeds}{suppression}"
     )];
-    if results.task == Task::EmptyBin {
-        lines.extend(scene_table(results));
-    } else {
-        lines.extend(object_table(results));
+    match results.task {
+        Task::EmptyBin => lines.extend(scene_table(results)),
+        Task::Scenes => lines.extend(case_table(results)),
+        Task::Train | Task::Test => lines.extend(object_table(results)),
     }
     lines.extend(unverified_lines(results));
     lines.push(timing_line(&results.timing));
+    if results.task == Task::Scenes {
+        lines.extend(vpg_metric_lines(results));
+    }
     lines
+}
+
+/// scenes: a line per run, then a line per case with VPG's metrics.
+fn case_table(results: &EvalResults) -> Vec<String> {
+    let width = results
+        .cases
+        .iter()
+        .map(|c| c.scene.len())
+        .max()
+        .unwrap_or(5)
+        .max(5);
+    let mut lines = vec![format!(
+        "{:<width$} {:>6} {:>7} {:>6} {:>6} {:>6}  ended",
+        "scene", "seed", "actions", "grasps", "pushes", "moved"
+    )];
+    for run in &results.runs {
+        let Some(bin) = &run.bin else { continue };
+        let grasps = run.attempts.iter().filter(|a| a.is_grasp()).count();
+        lines.push(format!(
+            "{:<width$} {:>6} {:>7} {:>6} {:>6} {:>3}/{:<2}  {}",
+            run.scene.as_deref().unwrap_or(""),
+            run.seed,
+            run.attempts.len(),
+            grasps,
+            run.attempts.len() - grasps,
+            bin.moved,
+            bin.locations.len(),
+            match (bin.left, bin.lost, bin.gave_up) {
+                (0, 0, _) => "cleared".to_owned(),
+                (_, _, true) => "gave up".to_owned(),
+                (0, lost, false) => format!("{lost} lost outside the bins"),
+                (left, _, false) => format!("{left} left at the attempt budget"),
+            }
+        ));
+    }
+    let percent =
+        |v: Option<f64>| v.map_or_else(|| "–".to_owned(), |v| format!("{:.1} %", 100.0 * v));
+    lines.push(format!(
+        "{:<width$} {:>10} {:>13} {:>17} {:>11}",
+        "case", "completion", "grasp success", "action efficiency", "grasp share"
+    ));
+    for case in &results.cases {
+        lines.push(format!(
+            "{:<width$} {:>10} {:>13} {:>17} {:>11}",
+            case.scene,
+            percent(Some(case.completion)),
+            percent(case.grasp_success),
+            percent(case.action_efficiency),
+            percent(case.grasp_share)
+        ));
+    }
+    lines
+}
+
+/// scenes: the three closing lines, VPG's metrics as means over the cases.
+fn vpg_metric_lines(results: &EvalResults) -> Vec<String> {
+    let Some(mean) = results.cases.last() else {
+        return Vec::new();
+    };
+    let cases = counted(results.cases.len() - 1, "case");
+    let percent = |v: Option<f64>| {
+        v.map_or_else(
+            || "– (no run completed)".to_owned(),
+            |v| format!("{:.1} %", 100.0 * v),
+        )
+    };
+    vec![
+        format!(
+            "completion: {} of {} runs cleared, mean over {cases} = {}",
+            mean.completed,
+            mean.runs,
+            percent(Some(mean.completion))
+        ),
+        format!(
+            "grasp success: per completed run, mean over {cases} = {}",
+            percent(mean.grasp_success)
+        ),
+        format!(
+            "action efficiency: objects / actions per completed run, mean over {cases} = {}",
+            percent(mean.action_efficiency)
+        ),
+    ]
 }
 
 /// empty_bin: a line per scene, the objects moved over the scenes and the pick success.

@@ -23,7 +23,17 @@ pub(crate) const EPISODE_EVERY_STEPS: u64 = 24;
 /// can free an object for a later attempt; not in train and test, where every attempt drops its
 /// object afresh and a push would only take an attempt (docs/evaluation.md, "Pushing").
 pub(crate) fn pushes_by_default(task: Task) -> bool {
-    task == Task::EmptyBin
+    task.clears_a_bin()
+}
+/// VPG's give-up rule for scenes: a run ends after more than 10 failed actions in a row.
+pub(crate) const VPG_GIVE_UP_AFTER: u32 = 11;
+/// How many failed actions in a row end a run, unless told: never in empty_bin (the
+/// reference's fixed budget of attempts), VPG's rule in scenes.
+pub(crate) fn give_up_by_default(task: Task) -> u32 {
+    match task {
+        Task::Scenes => VPG_GIVE_UP_AFTER,
+        _ => 0,
+    }
 }
 /// Everything one `graspmap eval` run needs, resolved and checked by the CLI.
 #[derive(Debug, Clone)]
@@ -38,6 +48,8 @@ pub(crate) struct EvalConfig {
     pub(crate) precision: Precision,
     /// Base seeds, run one after another and aggregated.
     pub(crate) seeds: Vec<u64>,
+    /// scenes: the scene files and folders of them.
+    pub(crate) scenes: Vec<PathBuf>,
     /// Failure suppression (model policy).
     pub(crate) suppression: SuppressionConfig,
     /// The model policy's checks.

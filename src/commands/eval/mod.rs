@@ -12,6 +12,7 @@ mod config;
 mod scene;
 mod sweep;
 
+use super::arranged::ArrangedScene;
 use super::{workers, Context};
 use crate::assets::objects::ObjectModel;
 use crate::data::output::{check_output_dir, check_output_file};
@@ -29,9 +30,10 @@ use crate::present::eval_report::{report_lines, summarise, AttemptRecord, SceneR
 use crate::present::video::save_video_atomic;
 use crate::sim::WorkcellConfig;
 pub(crate) use config::{
-    pushes_by_default, EvalConfig, ATTEMPTS_PER_OBJECT, EPISODE_EVERY_STEPS,
+    give_up_by_default, pushes_by_default, EvalConfig, ATTEMPTS_PER_OBJECT, EPISODE_EVERY_STEPS,
     SINGLE_OBJECT_SEED_OFFSET,
 };
+use scene::Setup;
 use sweep::{
     announce_plan, comparable, finished_runs, keep_interrupted, kept_path, resolved_config,
     resume_source,
@@ -65,7 +67,16 @@ struct Worker {
 /// train/test (each drops its object afresh).
 enum Job {
     Scene(u64),
-    Attempt { seed: u64, object: usize, try_: u32 },
+    /// scenes: scene file `scene` (an index into the plan's) with a seed.
+    Arranged {
+        scene: usize,
+        seed: u64,
+    },
+    Attempt {
+        seed: u64,
+        object: usize,
+        try_: u32,
+    },
 }
 
 /// A finished [`Job`]: a scene with the lines it printed, or one attempt of a seed.
@@ -80,6 +91,8 @@ struct Plan {
     seeds: Vec<u64>,
     names: Vec<String>,
     models: Vec<ObjectModel>,
+    /// scenes: the scene files, read and checked.
+    scenes: Vec<ArrangedScene>,
     vis_dir: PathBuf,
     per_scene: u64,
 }
@@ -91,6 +104,7 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         seeds,
         names,
         models,
+        scenes,
         vis_dir,
         per_scene,
     } = plan(context, &config)?;
@@ -98,7 +112,7 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         true => resumed(context, &config, &names, seeds.len())?,
         false => Vec::new(),
     };
-    let jobs = jobs(&config, &seeds, &runs, models.len());
+    let jobs = jobs(&config, &seeds, &runs, models.len(), scenes.len());
     // The episode video is one thread's frames, in order.
     let (workers, network_threads) = match config.record {
         Some(_) => (1, context.threads),
@@ -117,7 +131,7 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         push_unverified: config.push_unverified,
         bar: context.progress_bar(
             "attempts",
-            per_scene * seeds.len() as u64,
+            per_scene * (seeds.len() * scenes.len().max(1)) as u64,
             per_scene * runs.len() as u64,
         ),
         check_invariants: config.check_invariants,
@@ -126,14 +140,21 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
     let recording = evaluation.run_jobs(
         &config,
         &jobs,
-        &models,
+        (&models, &scenes),
         (workers, network_threads),
         &mut runs,
     )?;
-    // Resumed runs come first; a report lists its scenes in the order of --seeds.
-    runs.sort_by_key(|r| seeds.iter().position(|&s| s == r.seed));
+    // Resumed runs come first; a report lists its scenes in the order of --seeds (scenes:
+    // those of each scene file together, in the order of --scenes).
+    runs.sort_by_key(|r| {
+        let scene = scenes
+            .iter()
+            .position(|s| Some(&s.scene.name) == r.scene.as_ref());
+        (scene, seeds.iter().position(|&s| s == r.seed))
+    });
     evaluation.bar.finish_and_clear();
-    let interrupted = interrupt::requested().filter(|_| runs.len() < seeds.len());
+    let interrupted =
+        interrupt::requested().filter(|_| runs.len() < seeds.len() * scenes.len().max(1));
     if let Some(interrupted) = interrupted {
         let elapsed = start.elapsed().as_secs_f64();
         return Err(keep_interrupted(
@@ -184,17 +205,22 @@ fn plan(context: &Context, config: &EvalConfig) -> anyhow::Result<Plan> {
     // A missing or wrong checkpoint is reported before anything starts; each thread then
     // loads its own copy.
     policy(config)?;
-    let split = context.split()?;
+    let scenes = ArrangedScene::load_all(context, &config.scenes)?;
     let names: Vec<String> = match config.task {
-        Task::Train => split.train.clone(),
-        Task::Test => split.test.clone(),
-        Task::EmptyBin => split.all(),
+        Task::Train => context.split()?.train,
+        Task::Test => context.split()?.test,
+        Task::EmptyBin => context.split()?.all(),
+        Task::Scenes => scenes.iter().map(|s| s.scene.name.clone()).collect(),
     };
-    let models = context.objects.load_all(&names)?;
+    let models = match config.task {
+        Task::Scenes => Vec::new(),
+        _ => context.objects.load_all(&names)?,
+    };
     let vis_dir = context.data.join("affordance").join(match config.task {
         Task::Train => "eval_pick_training_vis",
         Task::Test => "eval_pick_testing_vis",
         Task::EmptyBin => "eval_empty_bin_vis",
+        Task::Scenes => "eval_scenes_vis",
     });
     let kept = kept_path(context, config, &names);
     check_output_dir(kept.parent().unwrap_or(&context.data), "the reports folder")?;
@@ -203,14 +229,20 @@ fn plan(context: &Context, config: &EvalConfig) -> anyhow::Result<Plan> {
         check_output_file(record, "--record")?;
     }
     let per_scene = match config.task {
-        Task::EmptyBin => u64::from(config.max_attempts),
-        _ => models.len() as u64 * u64::from(ATTEMPTS_PER_OBJECT),
+        Task::EmptyBin | Task::Scenes => u64::from(config.max_attempts),
+        Task::Train | Task::Test => models.len() as u64 * u64::from(ATTEMPTS_PER_OBJECT),
     };
-    announce_plan(context, config.task, per_scene, seeds.len());
+    announce_plan(
+        context,
+        config.task,
+        per_scene,
+        seeds.len() * scenes.len().max(1),
+    );
     Ok(Plan {
         seeds,
         names,
         models,
+        scenes,
         vis_dir,
         per_scene,
     })
@@ -237,12 +269,21 @@ fn resumed(
 
 /// The jobs of the seeds not in `runs`: a scene each (empty_bin), or each attempt of each
 /// object (train/test).
-fn jobs(config: &EvalConfig, seeds: &[u64], runs: &[SceneRun], objects: usize) -> Vec<Job> {
+fn jobs(
+    config: &EvalConfig,
+    seeds: &[u64],
+    runs: &[SceneRun],
+    objects: usize,
+    scenes: usize,
+) -> Vec<Job> {
     seeds
         .iter()
         .filter(|&&seed| !runs.iter().any(|r| r.seed == seed))
         .flat_map(|&seed| match config.task {
             Task::EmptyBin => vec![Job::Scene(seed)],
+            Task::Scenes => (0..scenes)
+                .map(|scene| Job::Arranged { scene, seed })
+                .collect(),
             Task::Train | Task::Test => (0..objects)
                 .flat_map(|object| {
                     (0..ATTEMPTS_PER_OBJECT).map(move |try_| Job::Attempt { seed, object, try_ })
@@ -322,7 +363,7 @@ impl Evaluation<'_> {
         &self,
         config: &EvalConfig,
         jobs: &[Job],
-        models: &[ObjectModel],
+        (models, scenes): (&[ObjectModel], &[ArrangedScene]),
         (workers, network_threads): (usize, u16),
         runs: &mut Vec<SceneRun>,
     ) -> anyhow::Result<Option<Vec<RgbImage>>> {
@@ -338,7 +379,7 @@ impl Evaluation<'_> {
                     recording: config.record.as_ref().map(|_| Vec::new()),
                 })
             },
-            |worker, job| self.run_job(worker, models, job),
+            |worker, job| self.run_job(worker, (models, scenes), job),
             |finished| match finished {
                 Finished::Scene(run, lines) => {
                     for line in &lines {
@@ -351,6 +392,7 @@ impl Evaluation<'_> {
                     attempts.push(record);
                     if attempts.len() == per_seed {
                         runs.push(SceneRun {
+                            scene: None,
                             seed,
                             attempts: std::mem::take(attempts),
                             bin: None,
@@ -366,7 +408,7 @@ impl Evaluation<'_> {
     fn run_job(
         &self,
         worker: &mut Worker,
-        models: &[ObjectModel],
+        (models, scenes): (&[ObjectModel], &[ArrangedScene]),
         job: &Job,
     ) -> anyhow::Result<Option<Finished>> {
         if interrupt::requested().is_some() {
@@ -374,7 +416,10 @@ impl Evaluation<'_> {
         }
         Ok(match *job {
             Job::Scene(seed) => self
-                .empty_bin(worker, models, seed)?
+                .empty_bin(worker, Setup::Drop(models), seed)?
+                .map(|(run, lines)| Finished::Scene(run, lines)),
+            Job::Arranged { scene, seed } => self
+                .empty_bin(worker, Setup::Arrange(&scenes[scene]), seed)?
                 .map(|(run, lines)| Finished::Scene(run, lines)),
             Job::Attempt { seed, object, try_ } => Some(Finished::Attempt(
                 seed,

@@ -9,6 +9,7 @@ use image::RgbImage;
 
 use super::{Evaluation, Worker, EPISODE_EVERY_STEPS, SINGLE_OBJECT_SEED_OFFSET};
 use crate::assets::objects::ObjectModel;
+use crate::commands::arranged::ArrangedScene;
 use crate::commands::attempt::{objects_in_bin, Look};
 use crate::data::atomic::save_image_atomic;
 use crate::grasp::draw::draw_grasp;
@@ -18,9 +19,10 @@ use crate::named::Named;
 use crate::policy::heights::HeightMap;
 use crate::policy::push::plan_push;
 use crate::policy::suppression::Suppression;
-use crate::present::eval_report::{AttemptRecord, AttemptTiming, BinOutcome, SceneRun};
+use crate::present::eval_report::{AttemptRecord, AttemptTiming, BinOutcome, PushRecord, SceneRun};
 use crate::sim::pick::{PickOutcome, PickReason};
 use crate::sim::{ObjectLocation, Workcell};
+use rapier3d::math::Vector;
 
 impl Evaluation<'_> {
     /// train/test: attempt `a` of object `i`, alone in a fresh drop.
@@ -57,19 +59,29 @@ impl Evaluation<'_> {
         Ok(record)
     }
 
-    /// empty_bin: every object in bin 1 at once, picked until the bin is empty or attempts run out.
-    /// With the lines it printed, or keeps to print when the scenes before it have printed theirs.
+    /// empty_bin and scenes: every object in bin 1 at once, picked until the bin is empty,
+    /// attempts run out or the give-up rule ends it. With the lines it printed, or keeps to
+    /// print when the scenes before it have printed theirs.
     pub(super) fn empty_bin(
         &self,
         worker: &mut Worker,
-        models: &[ObjectModel],
+        setup: Setup<'_>,
         seed: u64,
     ) -> anyhow::Result<Option<(SceneRun, Vec<String>)>> {
         let started = Instant::now();
         let mut cell = self.workcell()?;
-        cell.drop_objects(models, seed)?;
+        let scene = match setup {
+            Setup::Drop(models) => {
+                cell.drop_objects(models, seed)?;
+                None
+            }
+            Setup::Arrange(arranged) => {
+                arranged.place(&mut cell, seed)?;
+                Some(arranged.scene.name.clone())
+            }
+        };
         let mut setup_seconds = started.elapsed().as_secs_f64();
-        let total = models.len();
+        let total = cell.objects().len();
         let mut memory = Suppression::new(self.suppression);
         let mut attempts: Vec<AttemptRecord> = Vec::new();
         let mut gave_up = false;
@@ -84,7 +96,11 @@ impl Evaluation<'_> {
                 break;
             }
             let attempt_start = Instant::now();
-            let vis = self.vis_path(seed, &format!("seed{seed}_attempt{a:02}.png"));
+            let file = match &scene {
+                Some(name) => format!("{name}_seed{seed}_attempt{a:02}.png"),
+                None => format!("seed{seed}_attempt{a:02}.png"),
+            };
+            let vis = self.vis_path(seed, &file);
             let mut record = self.attempt(worker, &mut cell, &memory, seed, a, vis)?;
             if let Some(grasp) = record.grasp {
                 memory.record(grasp, record.success);
@@ -100,7 +116,11 @@ impl Evaluation<'_> {
             if interrupt::requested().is_some() {
                 return Ok(None);
             }
-            let failing = attempts.iter().rev().take_while(|r| !r.success).count();
+            let failing = attempts
+                .iter()
+                .rev()
+                .take_while(|r| r.failed_action())
+                .count();
             if self.give_up_after > 0 && failing >= self.give_up_after as usize {
                 gave_up = true;
                 self.bar.inc(u64::from(self.max_attempts - a - 1));
@@ -111,6 +131,7 @@ impl Evaluation<'_> {
         let bin = bin_outcome(&cell, gave_up);
         say(format!("{} objects left in the bin.", bin.left));
         let run = SceneRun {
+            scene,
             seed,
             attempts,
             bin: Some(bin),
@@ -170,10 +191,19 @@ impl Evaluation<'_> {
             }
             _ => None,
         };
+        let mut push_record = None;
         let outcome = match (&decision.grasp, push) {
             (_, Some(push)) => {
+                let before = positions(cell);
                 let pushed = cell.push(&push);
-                PickOutcome::failure(PickReason::Pushed, pushed.detail)
+                let record = PushRecord {
+                    start: [push.start.x, push.start.y],
+                    end: [push.end.x, push.end.y],
+                    moved: moved_by_push(cell, &before),
+                };
+                let detail = format!("{}; {}", pushed.detail, record.describe());
+                push_record = Some(record);
+                PickOutcome::failure(PickReason::Pushed, detail)
             }
             (Ok(g), None) => cell.pick(&world_grasp(camera, frame, *g)),
             (Err(why), None) => PickOutcome::failure(PickReason::Ungraspable, why.to_string()),
@@ -202,6 +232,7 @@ impl Evaluation<'_> {
             placed: outcome.placed,
             moved: None,
             vis: vis_written,
+            push: push_record,
             violations: cell.take_violations(),
             timing: AttemptTiming {
                 wall: 0.0,
@@ -236,14 +267,55 @@ fn moved_line(record: &AttemptRecord, moved: usize, total: usize) -> String {
     line
 }
 
-/// Where each object of an empty_bin scene ended up.
-fn bin_outcome(cell: &Workcell, gave_up: bool) -> BinOutcome {
-    let locations: BTreeMap<String, ObjectLocation> = cell
-        .objects()
+/// How an empty_bin or scenes run sets its bin up.
+#[derive(Clone, Copy)]
+pub(super) enum Setup<'a> {
+    /// empty_bin: these objects dropped with the seed.
+    Drop(&'a [ObjectModel]),
+    /// scenes: a scene file placed for the seed.
+    Arrange(&'a ArrangedScene),
+}
+
+/// An object counts as moved by a push when its centre shifted more than this (m): less is
+/// the settling of a pile that the stroke only brushed.
+const PUSH_MOVED: f32 = 0.005;
+
+/// Every object's centre now.
+fn positions(cell: &Workcell) -> Vec<Vector> {
+    (0..cell.objects().len())
+        .map(|i| cell.object_centre(i))
+        .collect()
+}
+
+/// The objects a push moved more than [`PUSH_MOVED`], farthest first, with how far (mm).
+fn moved_by_push(cell: &Workcell, before: &[Vector]) -> Vec<(String, f32)> {
+    let mut moved: Vec<(String, f32)> = before
         .iter()
         .enumerate()
-        .map(|(i, o)| (o.model.name.clone(), cell.locate(i)))
+        .map(|(i, was)| {
+            let shift = (cell.object_centre(i) - *was).length();
+            (cell.objects()[i].model.name.clone(), shift)
+        })
+        .filter(|(_, shift)| *shift > PUSH_MOVED)
+        .map(|(name, shift)| (name, 1000.0 * shift))
         .collect();
+    moved.sort_by(|a, b| b.1.total_cmp(&a.1));
+    moved
+}
+
+/// Where each object of an empty_bin scene ended up.
+fn bin_outcome(cell: &Workcell, gave_up: bool) -> BinOutcome {
+    // A scene may list an object twice (VPG's cases have two Block1s): the second is "#2".
+    let mut locations: BTreeMap<String, ObjectLocation> = BTreeMap::new();
+    for (i, o) in cell.objects().iter().enumerate() {
+        let mut key = o.model.name.clone();
+        let mut copy = 1;
+        while locations.contains_key(&key) {
+            copy += 1;
+            key = format!("{}#{copy}", o.model.name);
+        }
+        locations.insert(key, cell.locate(i));
+    }
     BinOutcome {
         moved: count(cell, ObjectLocation::Bin2),
         left: count(cell, ObjectLocation::Bin1),

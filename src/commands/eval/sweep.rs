@@ -99,7 +99,7 @@ pub(super) fn resume_source<'a>(context: &'a Context, kept: &'a Path) -> &'a Pat
 /// full bin.
 fn typical_attempt_seconds(task: Task) -> f64 {
     match task {
-        Task::EmptyBin => 0.8,
+        Task::EmptyBin | Task::Scenes => 0.8,
         Task::Train | Task::Test => 0.4,
     }
 }

@@ -14,7 +14,7 @@ use super::kept::{groups, Entry, Picture};
 use crate::metrics::{FailureTally, Spread};
 use crate::named::Named;
 use crate::policy::PolicyKind;
-use crate::present::eval_report::{ObjectSummary, SceneRun, Task};
+use crate::present::eval_report::{EvalResults, ObjectSummary, SceneRun, Task};
 
 /// Per-attempt visualisations shown per report; the rest stay in their folder.
 const VIS_SHOWN: usize = 6;
@@ -36,6 +36,9 @@ pub(crate) fn evals_section(
     }
     for &task in Task::ALL {
         let groups = groups(entries.iter().filter(|e| e.task == task));
+        if groups.is_empty() && task == Task::Scenes {
+            continue;
+        }
         if groups.is_empty() {
             html.push_str(&missing(
                 &format!("No {} evaluation yet", task.name()),
@@ -71,12 +74,15 @@ pub(crate) fn evals_section(
 
 /// The policies side by side: success with its Wilson interval (and empty_bin's objects moved).
 fn comparison(task: Task, entries: &[&Entry], files: &mut Files) -> anyhow::Result<String> {
-    let bin = task == Task::EmptyBin;
+    let bin = task.clears_a_bin();
     let mut html = String::from(
         "<table><tr><th>policy</th><th>seeds</th><th>pick success</th><th>95 % Wilson interval</th>",
     );
     if bin {
         html.push_str("<th>objects moved per scene</th><th>lost</th>");
+    }
+    if task == Task::Scenes {
+        html.push_str("<th>completion</th><th>grasp success</th><th>action efficiency</th>");
     }
     html.push_str("<th>report</th><th>commit</th></tr>\n");
     for entry in entries {
@@ -115,6 +121,18 @@ fn comparison(task: Task, entries: &[&Entry], files: &mut Files) -> anyhow::Resu
                     .map_or("–".into(), |l| format!("{:.1}", l.mean))
             );
         }
+        if task == Task::Scenes {
+            let percent =
+                |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.1} %", 100.0 * v));
+            let mean = r.cases.last();
+            let _ = write!(
+                html,
+                "<td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>",
+                percent(mean.map(|m| m.completion)),
+                percent(mean.and_then(|m| m.grasp_success)),
+                percent(mean.and_then(|m| m.action_efficiency))
+            );
+        }
         let interrupted = if r.interrupted { " (interrupted)" } else { "" };
         let _ = writeln!(
             html,
@@ -136,7 +154,9 @@ fn comparison(task: Task, entries: &[&Entry], files: &mut Files) -> anyhow::Resu
         false => (" with these settings", settings.eval_flags()),
     };
     // A shard's missing baselines are runs of the whole sweep; the shard is one part of it.
-    for policy in absent.into_iter().filter(|_| settings.shard.is_none()) {
+    // A scenes run's baselines need its scene files, which the row does not know.
+    let hints = settings.shard.is_none() && task != Task::Scenes;
+    for policy in absent.into_iter().filter(|_| hints) {
         html.push_str(&missing(
             &format!("No {policy} run of {}{with} yet", task.name()),
             &format!(
@@ -161,10 +181,10 @@ pub(super) fn details(
         esc(entry.policy.name()),
         esc(&entry.path.display().to_string())
     );
-    html.push_str(&if entry.task == Task::EmptyBin {
-        scene_table(&r.runs)
-    } else {
-        object_table(&r.per_object)
+    html.push_str(&match entry.task {
+        Task::EmptyBin => scene_table(&r.runs),
+        Task::Scenes => case_tables(r),
+        Task::Train | Task::Test => object_table(&r.per_object),
     });
     html.push_str(&gallery(entry, files)?);
     if video_at_top {
@@ -344,6 +364,52 @@ fn scene_table(runs: &[SceneRun]) -> String {
             run.attempts.len(),
             run.attempts.iter().filter(|a| a.success).count(),
             esc(&tally(failures.counts()))
+        );
+    }
+    html.push_str("</table>\n");
+    html
+}
+
+/// scenes: VPG's metrics per case, then every run with its actions, each push with what it
+/// moved (where runs fail, pushes are what to look at first).
+fn case_tables(results: &EvalResults) -> String {
+    let percent = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.1} %", 100.0 * v));
+    let mut html = String::from(
+        "<table><tr><th>case</th><th>runs</th><th>completion</th><th>grasp success</th><th>action efficiency</th><th>grasps among actions</th></tr>\n",
+    );
+    for case in &results.cases {
+        let _ = writeln!(
+            html,
+            "<tr><td>{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td></tr>",
+            esc(&case.scene),
+            case.runs,
+            percent(Some(case.completion)),
+            percent(case.grasp_success),
+            percent(case.action_efficiency),
+            percent(case.grasp_share)
+        );
+    }
+    html.push_str("</table>\n<table><tr><th>case</th><th>seed</th><th>actions, in order</th><th>moved</th></tr>\n");
+    for run in &results.runs {
+        let actions: Vec<String> = run
+            .attempts
+            .iter()
+            .map(|a| match (&a.push, a.success) {
+                (Some(push), _) => format!("push: {}", push.describe()),
+                (None, true) => format!("grasp ✓ {}", a.held.as_deref().unwrap_or("")),
+                (None, false) => format!("grasp ✗ {}", a.reason.name()),
+            })
+            .collect();
+        let (moved, of) = run
+            .bin
+            .as_ref()
+            .map_or((0, 0), |b| (b.moved, b.locations.len()));
+        let _ = writeln!(
+            html,
+            "<tr><td>{}</td><td class=\"num\">{}</td><td>{}</td><td class=\"num\">{moved}/{of}</td></tr>",
+            esc(run.scene.as_deref().unwrap_or("")),
+            run.seed,
+            esc(&actions.join(" · "))
         );
     }
     html.push_str("</table>\n");

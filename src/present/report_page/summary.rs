@@ -60,6 +60,10 @@ pub(crate) fn summary_section(
     let mut rows = Vec::new();
     for &task in Task::ALL {
         let groups = groups(main.iter().filter(|e| e.task == task));
+        // Scene files are the user's own: no row asks for them before they are run.
+        if task == Task::Scenes && groups.is_empty() {
+            continue;
+        }
         let headline = groups
             .iter()
             .find(|g| g.iter().any(|e| e.policy == PolicyKind::Model))
@@ -197,6 +201,11 @@ fn what(task: Task, settings: &Comparable) -> String {
         Some(n) if task == Task::EmptyBin => {
             format!("all {objects} at once, at most {n} attempts")
         }
+        _ if task == Task::Scenes => format!(
+            "{}: {}; VPG's metrics",
+            counted(settings.objects.len(), "scene file"),
+            settings.objects.join(", ")
+        ),
         _ => format!("{objects} × 3 attempts"),
     }
 }
@@ -225,6 +234,19 @@ fn cell(entry: &Entry, task: Task, files: &mut Files) -> anyhow::Result<String> 
                 moved.mean
             )
         }
+        (_, Task::Scenes) => match r.cases.last() {
+            Some(mean) => {
+                let percent =
+                    |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.1} %", 100.0 * v));
+                format!(
+                    "<b>completion {}</b>, grasp success {}, action efficiency {}",
+                    percent(Some(mean.completion)),
+                    percent(mean.grasp_success),
+                    percent(mean.action_efficiency)
+                )
+            }
+            None => format!("<b>{rate}</b>"),
+        },
         _ => format!("<b>{rate}</b>"),
     };
     let seeds = &entry.settings.seeds;
@@ -242,6 +264,12 @@ fn cell(entry: &Entry, task: Task, files: &mut Files) -> anyhow::Result<String> 
 
 /// The cell of a policy with no run yet: the command that makes one.
 fn not_run(row: &Row, policy: PolicyKind) -> String {
+    if row.task == Task::Scenes {
+        return format!(
+            "<td class=\"none\">not run: the model's eval command with <code>--policy {}</code></td>",
+            policy.name()
+        );
+    }
     let flags = row
         .settings
         .filter(|s| !s.is_default())
