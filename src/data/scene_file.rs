@@ -22,8 +22,8 @@ const VPG_WORKSPACE: [[f64; 2]; 2] = [[-0.724, -0.276], [-0.224, 0.224]];
 /// The lowest and highest centre height (m) that VPG's cases put an object inside the
 /// workspace at; parked objects lie far below.
 const VPG_HEIGHT: [f64; 2] = [-0.05, 0.3];
-/// How far below the floor's top an object's listed centre may lie (m): VPG lists its flat
-/// shapes a few millimetres low.
+/// How far below the floor's top an object's listed centre may lie (m): a flat shape lying on
+/// the floor has its centre only millimetres above it, and rounding may put it lower.
 const BELOW_FLOOR: f32 = 0.01;
 /// How far a quaternion's length may be from 1 before it counts as a mistake, not rounding.
 const UNIT_TOLERANCE: f32 = 1e-3;

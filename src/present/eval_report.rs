@@ -832,10 +832,12 @@ mod tests {
             placed: None,
             moved: Some(0),
             vis: None,
+            push: None,
             timing: AttemptTiming::default(),
             violations: Vec::new(),
         };
         let run = SceneRun {
+            scene: None,
             seed: 2,
             attempts: vec![attempt],
             bin: Some(BinOutcome {
@@ -951,6 +953,91 @@ mod tests {
                 .remove("violations");
         });
         assert!(EvalReport::read(&path, "fix it").is_ok());
+    }
+
+    /// A run of `actions` ("g" a held grasp, "f" a failed one, "p" a push that moved something),
+    /// ending with `left` of `objects` still in bin 1.
+    fn run(actions: &str, objects: usize, left: usize) -> SceneRun {
+        let attempts = actions
+            .chars()
+            .enumerate()
+            .map(|(i, kind)| AttemptRecord {
+                drop_seed: 0,
+                attempt: i as u32,
+                object: None,
+                grasp: None,
+                choice: None,
+                verified: None,
+                success: kind == 'g',
+                reason: match kind {
+                    'g' => PickReason::Success,
+                    'p' => PickReason::Pushed,
+                    _ => PickReason::EmptyHand,
+                },
+                detail: String::new(),
+                aimed_at: None,
+                held: None,
+                placed: None,
+                moved: None,
+                vis: None,
+                push: (kind == 'p').then(|| PushRecord {
+                    start: [0.0; 2],
+                    end: [0.1, 0.0],
+                    moved: vec![("Block4".to_owned(), 40.0)],
+                }),
+                timing: AttemptTiming::default(),
+                violations: Vec::new(),
+            })
+            .collect();
+        let locations = (0..objects)
+            .map(|i| {
+                let place = if i < left {
+                    ObjectLocation::Bin1
+                } else {
+                    ObjectLocation::Bin2
+                };
+                (format!("Block{i}"), place)
+            })
+            .collect();
+        SceneRun {
+            scene: Some("case".to_owned()),
+            seed: 0,
+            attempts,
+            bin: Some(BinOutcome {
+                moved: objects - left,
+                left,
+                lost: 0,
+                locations,
+                gave_up: left > 0,
+            }),
+        }
+    }
+
+    #[test]
+    fn vpg_metrics_average_over_completed_runs_as_its_evaluate_py_does() {
+        // Cleared with a push and a failed grasp: 3 of 4 grasps held, 3 objects in 5 actions.
+        let first = run("pggfg", 3, 0);
+        // Cleared grasp by grasp.
+        let second = run("ggg", 3, 0);
+        // Gave up: counts against completion only.
+        let third = run("gfffffffffff", 3, 2);
+        let metrics = CaseMetrics::of("case", &[&first, &second, &third]);
+        assert_eq!((metrics.runs, metrics.completed), (3, 2));
+        assert!((metrics.completion - 2.0 / 3.0).abs() < 1e-12);
+        assert!((metrics.grasp_success.unwrap() - (0.75 + 1.0) / 2.0).abs() < 1e-12);
+        assert!((metrics.action_efficiency.unwrap() - (3.0 / 5.0 + 1.0) / 2.0).abs() < 1e-12);
+        assert!((metrics.grasp_share.unwrap() - (4.0 / 5.0 + 1.0) / 2.0).abs() < 1e-12);
+        // A push that moved something is an action that did not fail; one that moved nothing
+        // counts towards giving up, as VPG's rule has it.
+        assert!(!first.attempts[0].failed_action());
+        let mut idle = first.attempts[0].clone();
+        idle.push.as_mut().unwrap().moved.clear();
+        assert!(idle.failed_action());
+        let none = CaseMetrics::of("case", &[&third]);
+        assert_eq!((none.completion, none.grasp_success), (0.0, None));
+        let mean = CaseMetrics::mean(&[metrics, none]);
+        assert!((mean.completion - 1.0 / 3.0).abs() < 1e-12);
+        assert!((mean.grasp_success.unwrap() - 0.875).abs() < 1e-12);
     }
 
     #[test]

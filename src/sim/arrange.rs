@@ -27,8 +27,9 @@ pub struct Overlap {
 }
 
 impl Workcell {
-    /// Places `objects` at their poses, at rest, lifting any that reaches into bin 1's floor
-    /// until it rests on it (VPG lists some shapes a few millimetres low). The scene is not
+    /// Places `objects` at their poses, at rest, lifting any that reaches more than a millimetre
+    /// into bin 1's floor until it rests on it (a hand-written file's rounding, or a model
+    /// framed otherwise than the file's author had it). The scene is not
     /// settled: [`Workcell::deepest_overlap`] can judge the layout as listed first.
     pub fn place_at_rest(&mut self, objects: &[(ObjectModel, Pose)]) -> anyhow::Result<()> {
         for (model, pose) in objects {

@@ -1,8 +1,8 @@
 //! The integration tests, built into one binary so that libtorch and rapier are linked once.
 //!
 //! Each module covers one area end to end: the CLI's outputs and errors, depth input and clutter
-//! labels, evaluation, the mesh importer, labelling, libtorch itself, physics grasps, training,
-//! the run report and videos, and the web pages (over HTTP and in a browser). `layers` reads
+//! labels, evaluation, the mesh importer, labelling, libtorch itself, physics grasps, scene
+//! files and VPG's test cases, training, the run report and videos, and the web pages (over HTTP and in a browser). `layers` reads
 //! src/ itself: its imports against the layer table in src/lib.rs.
 
 mod bad_input;
@@ -20,6 +20,7 @@ mod libtorch;
 mod physics;
 mod place;
 mod report;
+mod scenes;
 mod slurm;
 mod train;
 mod video;

@@ -320,8 +320,14 @@ fn finish(
     results.video = config.record.clone();
     results.video_encode_s = ran.video_encode_s;
     results.vis_dir = drew.then(|| vis_dir.to_path_buf());
-    for line in report_lines(&results, config.suppression.remember) {
-        context.say(&line);
+    let lines = report_lines(&results, config.suppression.remember);
+    // VPG's three metrics close a scenes run's output, after where its report went.
+    let closing = match config.task {
+        Task::Scenes => 3.min(lines.len()),
+        _ => 0,
+    };
+    for line in &lines[..lines.len() - closing] {
+        context.say(line);
     }
     let resolved = resolved_config(context, config, names);
     // The latest finished run of each task and policy stays under DATA, beside the model, for
@@ -339,6 +345,9 @@ fn finish(
             kept.display(),
             settings.describe()
         )),
+    }
+    for line in &lines[lines.len() - closing..] {
+        context.say(line);
     }
     Ok(())
 }

@@ -118,9 +118,13 @@ pub(super) fn announce_plan(context: &Context, task: Task, per_scene: u64, scene
     } else {
         format!("{:.0} min", seconds / 60.0)
     };
+    let resume = match task {
+        Task::Scenes => "",
+        _ => ", --resume continues",
+    };
     eprintln!(
         "eval: {} of up to {}, {attempts} attempts in all: about {estimate} at {} s an attempt; \
-         Ctrl-C keeps the finished scenes, --resume continues",
+         Ctrl-C keeps the finished scenes{resume}",
         counted(scenes, "scene"),
         counted(per_scene as usize, "attempt"),
         typical_attempt_seconds(task)
@@ -187,6 +191,9 @@ pub(super) fn resolved_config(
     if model {
         resolved["checkpoint_sha256"] = crate::model::checkpoint::file_sha256(&config.checkpoint)
             .map_or(serde_json::Value::Null, serde_json::Value::from);
+    }
+    if config.task == Task::Scenes {
+        resolved["scenes"] = serde_json::json!(config.scenes);
     }
     if !config.shard.is_whole() {
         resolved["shard"] = serde_json::Value::from(config.shard.to_string());
