@@ -2,7 +2,9 @@
 //! object under the network's best grasp away from its neighbours and off the walls, from a
 //! start on free floor (docs/evaluation.md, "Pushing").
 //!
-//! Planned on the frame's height map alone, as the checks are: no mask, no object identity.
+//! Planned on the frame's height map and colours, as the checks are: no mask, no object
+//! identity. Colour tells packed objects of one height apart, which heights alone cannot: VPG's
+//! blocks stand side by side, 50 mm tall each.
 
 use rapier3d::math::Vector;
 
@@ -24,8 +26,18 @@ const START_CLEARANCE: f32 = 0.03;
 const START_BEHIND: [f32; 2] = [0.03, 0.14];
 /// Step of the search for a free start (m).
 const START_STEP: f32 = 0.005;
-/// How far past the target the stroke goes (m).
-const PAST_TARGET: f32 = 0.08;
+/// How far the stroke moves the object (m): enough to open room for a pad (22 mm) and the open
+/// jaw's margin beside it, no more, so that the object lands near where it was and off nothing.
+const PUSH_TRAVEL: f32 = 0.06;
+/// Least distance the stroke's end passes the target's centre (m), for objects that the height
+/// map shows smaller than they are.
+const PAST_TARGET_MIN: f32 = 0.02;
+/// Neighbours whose surfaces lie this close to the path that the pushed object sweeps (m)
+/// would be swept along with it.
+const SWEEP_MARGIN: f32 = 0.01;
+/// Neighbouring pixels whose colours differ by more than this (sum over R, G, B, of 255 each)
+/// belong to different objects.
+const SAME_COLOUR_STEP: u32 = 60;
 /// Room left between the palm and the walls (m).
 const WALL_MARGIN: f32 = 0.01;
 /// Neighbours within this distance of the target set the push's direction (m).
@@ -38,14 +50,23 @@ const SAME_SURFACE_STEP: f32 = 0.01;
 const HEADINGS: usize = 16;
 
 /// The push for the object under `grasp`, or `None` when no heading has free floor behind it.
-pub fn plan_push(heights: &HeightMap, grasp: PixelGrasp) -> Option<WorldPush> {
+/// `rgb` is the frame's colour, row-major RGB bytes.
+///
+/// Of the headings that turn away from the neighbours, those whose stroke would sweep a
+/// neighbour along with the object come last; the stroke moves the object [`PUSH_TRAVEL`].
+pub fn plan_push(heights: &HeightMap, rgb: &[u8], grasp: PixelGrasp) -> Option<WorldPush> {
     let tote = PICK_TOTE;
     let target = heights.point(grasp.u, grasp.v);
     let occupied: Vec<Vector> = heights
         .surface_points()
         .filter(|p| p.z > FLOOR_TOP + OCCUPIED_ABOVE_FLOOR && inside(&tote, *p, 0.0))
         .collect();
-    let own = own_top(heights, grasp.u, grasp.v);
+    let own = own_top(heights, rgb, grasp.u, grasp.v);
+    let own_points: Vec<Vector> = heights
+        .pixels()
+        .filter(|&(u, v)| own[(v * heights.size() + u) as usize])
+        .map(|(u, v)| heights.point(u, v))
+        .collect();
     let others: Vec<Vector> = heights
         .pixels()
         .filter(|&(u, v)| !own[(v * heights.size() + u) as usize])
@@ -61,7 +82,12 @@ pub fn plan_push(heights: &HeightMap, grasp: PixelGrasp) -> Option<WorldPush> {
         // Square to the preferred way is still no push towards what it avoids.
         .filter(|d| d.dot(preferred) > -1e-3)
         .collect();
-    headings.sort_by(|a, b| b.dot(preferred).total_cmp(&a.dot(preferred)));
+    headings.sort_by(|a, b| {
+        let sweeps = |d: &Vector| sweeps_a_neighbour(target, *d, &own_points, &others);
+        sweeps(a)
+            .cmp(&sweeps(b))
+            .then(b.dot(preferred).total_cmp(&a.dot(preferred)))
+    });
     let z = FLOOR_TOP + PUSH_HEIGHT;
     let flat = |p: Vector| Vector::new(p.x, p.y, z);
     for d in headings {
@@ -75,8 +101,11 @@ pub fn plan_push(heights: &HeightMap, grasp: PixelGrasp) -> Option<WorldPush> {
                         .all(|p| Vector::new(p.x - s.x, p.y - s.y, 0.0).length() > START_CLEARANCE)
             });
         let Some(start) = start else { continue };
-        // As far past the target as the walls allow; a stroke that cannot cross it is no push.
-        let reach = (0..=((PAST_TARGET / START_STEP) as usize))
+        // The hand meets the object at its back edge and moves it from there; as far as that
+        // as the walls allow, and a stroke that cannot cross the target is no push.
+        let back = extent_along(target, d, &own_points).0;
+        let past_target = (back + PUSH_TRAVEL).max(PAST_TARGET_MIN);
+        let reach = (0..=((past_target / START_STEP) as usize))
             .rev()
             .map(|k| flat(target + d * (k as f32 * START_STEP)))
             .find(|&e| clear_of_walls(&tote, e, d));
@@ -87,11 +116,48 @@ pub fn plan_push(heights: &HeightMap, grasp: PixelGrasp) -> Option<WorldPush> {
     None
 }
 
+/// How far the object's surface reaches behind and ahead of `target` along `d` (m; the first
+/// is negative).
+fn extent_along(target: Vector, d: Vector, own: &[Vector]) -> (f32, f32) {
+    own.iter()
+        .map(|p| Vector::new(p.x - target.x, p.y - target.y, 0.0).dot(d))
+        .fold((0.0f32, 0.0f32), |(lo, hi), a| (lo.min(a), hi.max(a)))
+}
+
+/// Whether pushing the object at `target` along `d` by [`PUSH_TRAVEL`] would drive it into
+/// another object's surface: one lying ahead of it, within the object's width across `d`.
+fn sweeps_a_neighbour(target: Vector, d: Vector, own: &[Vector], others: &[Vector]) -> bool {
+    let across = Vector::new(-d.y, d.x, 0.0);
+    let offset = |p: &Vector| Vector::new(p.x - target.x, p.y - target.y, 0.0);
+    let front = extent_along(target, d, own).1;
+    let half_width = own
+        .iter()
+        .map(|p| offset(p).dot(across).abs())
+        .fold(0.0f32, f32::max);
+    others.iter().any(|p| {
+        let along = offset(p).dot(d);
+        along > front - SWEEP_MARGIN
+            && along < front + PUSH_TRAVEL + SWEEP_MARGIN
+            && offset(p).dot(across).abs() < half_width + SWEEP_MARGIN
+    })
+}
+
 /// The pixels of the surface under (`u`, `v`): those reached from it through raised neighbours
-/// no more than [`SAME_SURFACE_STEP`] higher or lower, which a neighbouring object's edge
-/// usually is.
-fn own_top(heights: &HeightMap, u: u32, v: u32) -> Vec<bool> {
+/// no more than [`SAME_SURFACE_STEP`] higher or lower and of about its colour
+/// ([`SAME_COLOUR_STEP`]), which a neighbouring object's edge usually is not.
+fn own_top(heights: &HeightMap, rgb: &[u8], u: u32, v: u32) -> Vec<bool> {
     let size = heights.size();
+    let colour = |u: u32, v: u32| {
+        let i = 3 * (v * size + u) as usize;
+        rgb.get(i..i + 3).map_or([0; 3], |c| [c[0], c[1], c[2]])
+    };
+    let alike = |a: [u8; 3], b: [u8; 3]| {
+        a.iter()
+            .zip(b)
+            .map(|(x, y)| u32::from(x.abs_diff(y)))
+            .sum::<u32>()
+            <= SAME_COLOUR_STEP
+    };
     let raised = |u: u32, v: u32| heights.at(u, v) > FLOOR_TOP + OCCUPIED_ABOVE_FLOOR;
     let mut own = vec![false; (size * size) as usize];
     if !raised(u, v) {
@@ -112,6 +178,7 @@ fn own_top(heights: &HeightMap, u: u32, v: u32) -> Vec<bool> {
             if !own[index]
                 && raised(nu, nv)
                 && (heights.at(nu, nv) - here).abs() < SAME_SURFACE_STEP
+                && alike(colour(u, v), colour(nu, nv))
             {
                 own[index] = true;
                 frontier.push((nu, nv));
@@ -212,7 +279,7 @@ mod tests {
         // close for the hand to start between them: the push leaves at an angle.
         let frame = blocks_frame(&camera, &[[55, 65, 58, 70], [68, 80, 56, 72]]);
         let heights = HeightMap::new(&camera, &frame);
-        let push = plan_push(&heights, grasp_at(60, 64)).expect("free floor all round");
+        let push = plan_push(&heights, &frame.rgb, grasp_at(60, 64)).expect("free floor all round");
         let target = heights.point(60, 64);
         let neighbour = heights.point(74, 64);
         let away = Vector::new(target.x - neighbour.x, target.y - neighbour.y, 0.0).normalize();
@@ -223,7 +290,7 @@ mod tests {
         );
         // It starts behind the target, on floor no block covers, and ends past it.
         assert!((push.start - target).dot(push.direction()) < 0.0);
-        assert!((push.end - target).dot(push.direction()) > 0.05);
+        assert!((push.end - target).dot(push.direction()) >= PAST_TARGET_MIN - 1e-3);
         assert_eq!(push.start.z, FLOOR_TOP + PUSH_HEIGHT);
         for p in heights.surface_points() {
             if p.z > FLOOR_TOP + OCCUPIED_ABOVE_FLOOR {
@@ -252,7 +319,8 @@ mod tests {
         let heights = HeightMap::new(&camera, &frame);
         let middle = (near + far) / 2;
         let target = heights.point(middle, 64);
-        let push = plan_push(&heights, grasp_at(middle, 64)).expect("a push along the wall");
+        let push =
+            plan_push(&heights, &frame.rgb, grasp_at(middle, 64)).expect("a push along the wall");
         let wall_normal = Vector::new(0.0, if target.y < tote.center[1] { 1.0 } else { -1.0 }, 0.0);
         let along_the_wall_or_off_it = push.direction().dot(wall_normal) >= 0.0;
         assert!(along_the_wall_or_off_it, "{push:?} runs into the wall");
@@ -262,10 +330,55 @@ mod tests {
     }
 
     #[test]
+    fn packed_blocks_of_one_height_are_told_apart_by_colour_and_pushed_apart() {
+        let camera = Camera::top_down();
+        // Two blocks of one height touching along a column boundary; the right one is red.
+        let mut frame = blocks_frame(&camera, &[[50, 59, 58, 70], [60, 69, 58, 70]]);
+        for v in 58..=70u32 {
+            for u in 60..=69u32 {
+                let i = 3 * (v * 128 + u) as usize;
+                frame.rgb[i] = 200;
+            }
+        }
+        let heights = HeightMap::new(&camera, &frame);
+        let target = heights.point(54, 64);
+        let neighbour = heights.point(65, 64);
+        let push = plan_push(&heights, &frame.rgb, grasp_at(54, 64)).expect("free floor around");
+        let away = Vector::new(target.x - neighbour.x, target.y - neighbour.y, 0.0).normalize();
+        assert!(
+            push.direction().dot(away) > 0.5,
+            "pushed along {:?}, away from the red block is {away:?}",
+            push.direction()
+        );
+        // The stroke moves the block its travel from where the hand meets it, not the pile.
+        let own = own_top(&heights, &frame.rgb, 54, 64);
+        assert!(
+            !own[(64 * 128 + 65) as usize],
+            "the red block counted as the target's"
+        );
+        let travel = (push.end - target).dot(push.direction())
+            - extent_along(
+                target,
+                push.direction(),
+                &[
+                    heights.point(50, 64),
+                    heights.point(59, 64),
+                    heights.point(54, 58),
+                    heights.point(54, 70),
+                ],
+            )
+            .0;
+        assert!(
+            travel < PUSH_TRAVEL + 0.01,
+            "the block is pushed {travel} m"
+        );
+    }
+
+    #[test]
     fn no_push_when_the_floor_round_the_target_is_covered() {
         let camera = Camera::top_down();
         let frame = blocks_frame(&camera, &[[0, 127, 0, 127]]);
         let heights = HeightMap::new(&camera, &frame);
-        assert_eq!(plan_push(&heights, grasp_at(64, 64)), None);
+        assert_eq!(plan_push(&heights, &frame.rgb, grasp_at(64, 64)), None);
     }
 }
