@@ -23,8 +23,8 @@ fn main() -> ExitCode {
 /// The network's activations at batch 8 are 32 MiB tensors, just over glibc's largest mmap
 /// threshold, so by default every one was a fresh mmap and every first touch of its pages a
 /// fault the kernel zero-fills: a third of training's wall time went to the kernel. Served from
-/// the heap and never trimmed, the same memory is reused step after step (2.3 s → 1.5 s per step
-/// on an AVX2-only CPU; docs/history.md#training-glibcs-heap-instead-of-an-mmap-per-activation).
+/// the heap and never trimmed, the same memory is reused step after step (measured on an AVX2-only
+/// CPU: "Training: glibc's heap" in `git show 2c24231:docs/history.md`).
 fn keep_freed_memory() {
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
     // SAFETY: mallopt only changes allocator tuning parameters; it is called before any thread

@@ -94,9 +94,9 @@ impl AffordanceModel {
         let values = tch::no_grad(|| {
             let batch =
                 Tensor::from_slice(&input).view([BINS as i64, channels as i64, h as i64, w as i64]);
-            // oneDNN's fp32 convolutions run a fifth faster in channels_last
-            // (BENCHMARKS.md#rust-against-pytorch); only for inference, since its backward pass
-            // is slower there.
+            // oneDNN's fp32 convolutions ran faster in channels_last on an AVX2-only CPU (the
+            // measurement diary, `git show 2c24231:docs/history.md`); only for inference, since
+            // its backward pass is slower there.
             let batch = match self.precision {
                 Precision::Fp32 => crate::model::unet::channels_last(&batch),
                 Precision::Bf16 => batch,

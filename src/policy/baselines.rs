@@ -72,7 +72,8 @@ impl Policy for OraclePolicy {
 
 /// How far from a remembered grasp's centre (pixels, each way) an object counts as tried: a
 /// grasp that closes on air often nudges the object it missed off its centre pixel. 2 px (about
-/// 2 cm) moved more than 0 or 4 (BENCHMARKS.md#oracle-yardstick-in-clutter).
+/// 2 cm) moved more than 0 or 4 (the measurement diary, `git show 2c24231:docs/history.md`; the
+/// oracle with this memory today: BENCHMARKS.md#oracle-yardstick-in-clutter).
 const TRIED_REACH_PX: u32 = 2;
 
 /// `ids` reordered by how many remembered grasps land on or next to each in `frame`, fewest

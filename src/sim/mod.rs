@@ -39,7 +39,8 @@ pub(crate) const ROBOT_BASE: Vector = Vector::new(0.0, 0.0, 0.4);
 /// `stepping::FAST_OBJECT_SPEED`. An object dropped 0.2–0.7 m lands at 2–3.7 m/s, 8–15 mm per step, and
 /// a landing (or a drill landing on a thin clamp) left an object 5–10 mm inside the floor for a
 /// step or two: 15 times in the drops of the soak's 200 scenes. With quarter steps there were
-/// none; halves left 3, and quarters only above 0.5 m/s left 1 (BENCHMARKS.md#physics-soak).
+/// none; halves left 3, and quarters only above 0.5 m/s left 1 (the soaks in the measurement
+/// diary, `git show 2c24231:docs/history.md`; today's soak: BENCHMARKS.md#physics-soak).
 pub(crate) const FAST_SUBSTEPS: u32 = 4;
 const PEDESTAL_RADIUS: f32 = 0.0734;
 /// How far below a tote's floor top an object's centre may be and still count as inside (m).
@@ -382,7 +383,7 @@ impl Workcell {
     /// How deep `collider` is sunk into the environment (m), measured only against the boxes
     /// whose contact points (from before the last step) read deeper than `screen`; 0 otherwise.
     /// A check made every step screens this way: the exact query for every object resting on
-    /// the floor took an empty_bin eval from 0.36 to 0.41 s per attempt.
+    /// the floor made every empty_bin attempt measurably slower.
     pub(crate) fn environment_penetration_beyond(
         &self,
         collider: ColliderHandle,

@@ -106,7 +106,8 @@ fn oracle_lifts_a_standing_soup_can() {
 #[test]
 fn oracle_lifts_the_clamp() {
     // Yaw 0.5 rad. Of yaws 0–1.2 rad, only 0.4 fails on this physics: a finger reads 153 N on
-    // the clamp, just over the 150 N protective stop (docs/history.md, the physics soak).
+    // the clamp, just over the 150 N protective stop (the physics soak in the measurement diary,
+    // `git show 2c24231:docs/history.md`).
     let mut cell = placed(
         "YcbMediumClamp",
         Pose::from_parts(
@@ -121,9 +122,10 @@ fn oracle_lifts_the_clamp() {
 #[test]
 fn oracle_lifts_a_lying_mustard_bottle() {
     // On its broad face the body (99 mm) is wider than the jaw; what fits is the cap end.
-    // Cap grasps are marginal at some yaws (docs/history.md, the sweep of yaws 0–1.2 rad): with
-    // the faster carry, 0.3 and 0.5 dropped the bottle on the way to bin 2; at 1.2 rad/s and
-    // 1 rad/s² (docs/grasping.md) 0.3, 0.5, 0.6, 0.8 and 1.0 all place it.
+    // Cap grasps are marginal at some yaws (the sweep of yaws in the measurement diary,
+    // `git show 2c24231:docs/history.md`): with the faster carry, 0.3 and 0.5 dropped the bottle
+    // on the way to bin 2; at 1.2 rad/s and 1 rad/s² (docs/grasping.md) 0.3, 0.5, 0.6, 0.8 and 1.0
+    // all place it.
     let mut cell = placed(
         "YcbMustardBottle",
         Pose::from_parts(

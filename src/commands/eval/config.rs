@@ -15,13 +15,15 @@ use crate::present::eval_report::Task;
 pub(crate) const ATTEMPTS_PER_OBJECT: u32 = 3;
 /// Offset of the train/test drop seeds (the reference's): seed + 100·i + a + 10000.
 pub(crate) const SINGLE_OBJECT_SEED_OFFSET: u64 = 10_000;
-/// Physics steps between episode video frames: 10 fps, so that a 25-attempt episode stays
-/// near 3 MB as MP4 (about 19 MB as GIF); `grasp --record` films one attempt at 24 fps.
+/// Physics steps between episode video frames: 10 fps, so that a 25-attempt episode stays small
+/// (its MP4 and GIF sizes: BENCHMARKS.md#videos-and-the-report); `grasp --record` films one
+/// attempt at 24 fps.
 pub(crate) const EPISODE_EVERY_STEPS: u64 = 24;
 /// Whether the model policy pushes where no grasp passes verification, unless told: in
-/// empty_bin, where the grasps it would execute there hold about one time in twenty and a push
-/// can free an object for a later attempt; not in train and test, where every attempt drops its
-/// object afresh and a push would only take an attempt (docs/evaluation.md, "Pushing").
+/// empty_bin, where the grasps it would execute there rarely hold and a push can free an object
+/// for a later attempt (`--push-unverified false` in BENCHMARKS.md#verification); not in train
+/// and test, where every attempt drops its object afresh and a push would only take an attempt
+/// (docs/evaluation.md, "Pushing").
 pub(crate) fn pushes_by_default(task: Task) -> bool {
     task.clears_a_bin()
 }

@@ -73,7 +73,7 @@ pub(crate) fn save_video_atomic(
 /// All frames share one palette, learnt (NeuQuant) from a few frames spread over the video, and
 /// each pixel finds its palette entry through a 32 × 32 × 32 lookup table. The workcell's colours
 /// barely change from frame to frame, and quantising every frame on its own took most of an
-/// episode video's time (25 s of 2,500 frames against about 3 s this way).
+/// episode video's time (the encoding's share now: BENCHMARKS.md#videos-and-the-report).
 fn save_gif_atomic(frames: &[image::RgbImage], delay_cs: u32, path: &Path) -> anyhow::Result<()> {
     let Some(first) = frames.first() else {
         anyhow::bail!("{}: a video needs at least one frame", path.display());
