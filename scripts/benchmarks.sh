@@ -406,6 +406,18 @@ t_yardstick() {
   evals model "empty_bin-np8 empty_bin-heldout-np8"
 }
 
+# VPG's cases: ev's model and oracle on the scene files the tests carry, each scene file once
+# per seed; spec_args does not apply (the task reads --scenes, not a drop seed).
+t_scenes() {
+  local policy seeds=0-4
+  ((quick)) && seeds=0
+  ensure_model
+  for policy in model oracle; do
+    eval_into "$out/scenes/$policy.json" "$model_dir" --objects-dir "$root/assets/blocks" --policy "$policy" \
+      --task scenes --scenes "$root/tests/fixtures/vpg" --seeds "$seeds" --n-past-action 8
+  done
+}
+
 t_placing() {
   local policy
   for policy in model oracle; do

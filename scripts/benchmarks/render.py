@@ -312,6 +312,36 @@ def t_yardstick(p):
     p.say()
 
 
+# VPG's own figures for its method on its eleven cases: Zeng et al., IROS 2018, Table II
+# ("simulation results on challenging arrangements", mean %), on V-REP with its own robot.
+VPG_TABLE_II = [
+    ("Grasping-only", "40.6", "51.7", "51.7"),
+    ("P+G Reactive", "48.2", "59.0", "46.4"),
+    ("VPG", "82.7", "77.2", "60.1"),
+]
+
+
+def t_scenes(p):
+    p.head("VPG's challenging arrangements",
+           "`graspmap --objects-dir assets/blocks eval --task scenes --scenes tests/fixtures/vpg --seeds 0-4 "
+           "--n-past-action 8 [--policy oracle]`; the demo model (default labels, never the blocks).")
+    m, o = p.load("scenes/model.json")["results"], p.load("scenes/oracle.json")["results"]
+    cell = lambda v: DASH if v is None else f"{pct(v)} %"
+    rows = []
+    for mc, oc in zip(m["cases"], o["cases"]):
+        name = "**mean**" if mc["scene"] == "mean" else mc["scene"]
+        rows.append([name] + [f"{cell(a)} / {cell(b)}" for a, b in (
+            (mc["completion"], oc["completion"]), (mc["grasp_success"], oc["grasp_success"]),
+            (mc["action_efficiency"], oc["action_efficiency"]), (mc["grasp_share"], oc["grasp_share"]))])
+    p.md(["case (runs each: seeds)", "completion: model / oracle", "grasp success", "action efficiency",
+          "grasps among actions"], rows)
+    p.say("VPG's published figures on all eleven of its cases, in its own simulator (V-REP, its own arm and "
+          "gripper), not graspmap's: Zeng et al., IROS 2018, Table II, mean %.")
+    p.say()
+    p.md(["method (VPG, V-REP)", "completion", "grasp success", "action efficiency"],
+         [list(row) for row in VPG_TABLE_II])
+
+
 def t_sweep(p):
     p.head("Oracle sweep", "`scripts/grasp-sweep.sh oracle|random` (one `graspmap grasp` per object and seed).")
     rows = []
