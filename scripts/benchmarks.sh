@@ -406,14 +406,20 @@ t_yardstick() {
   evals model "empty_bin-np8 empty_bin-heldout-np8"
 }
 
-# VPG's cases: ev's model and oracle on the scene files the tests carry, each scene file once
-# per seed; spec_args does not apply (the task reads --scenes, not a drop seed).
+# VPG's cases: the model (with the default verification margin and with 10 mm) and the oracle on
+# the scene files the tests carry, each scene file once per seed; spec_args does not apply (the
+# task reads --scenes, not a drop seed).
 t_scenes() {
-  local policy seeds=0-4
+  local seeds=0-4 name flags
   ((quick)) && seeds=0
   ensure_model
-  for policy in model oracle; do
-    eval_into "$out/scenes/$policy.json" "$model_dir" --objects-dir "$root/assets/blocks" --policy "$policy" \
+  for name in model model+verify-margin-10 oracle; do
+    case $name in
+      model) flags=(--policy model) ;;
+      model+verify-margin-10) flags=(--policy model --verify-margin 10) ;;
+      oracle) flags=(--policy oracle) ;;
+    esac
+    eval_into "$out/scenes/$name.json" "$model_dir" --objects-dir "$root/assets/blocks" "${flags[@]}" \
       --task scenes --scenes "$root/tests/fixtures/vpg" --seeds "$seeds" --n-past-action 8
   done
 }

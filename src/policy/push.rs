@@ -13,6 +13,7 @@ use crate::grasp::gripper::GRIPPER;
 use crate::grasp::tote::{Tote, FLOOR_TOP, PICK_TOTE};
 use crate::grasp::world::WorldPush;
 use crate::grasp::PixelGrasp;
+use crate::vision::render::Frame;
 
 /// Height of the TCP (the fingertips) above the tote floor during the stroke (m): above the
 /// floor's friction, below the top of every object but the flattest.
@@ -50,11 +51,12 @@ const SAME_SURFACE_STEP: f32 = 0.01;
 const HEADINGS: usize = 16;
 
 /// The push for the object under `grasp`, or `None` when no heading has free floor behind it.
-/// `rgb` is the frame's colour, row-major RGB bytes.
+/// `frame` is the frame the height map was made from; its colours tell objects apart.
 ///
 /// Of the headings that turn away from the neighbours, those whose stroke would sweep a
 /// neighbour along with the object come last; the stroke moves the object [`PUSH_TRAVEL`].
-pub fn plan_push(heights: &HeightMap, rgb: &[u8], grasp: PixelGrasp) -> Option<WorldPush> {
+pub fn plan_push(heights: &HeightMap, frame: &Frame, grasp: PixelGrasp) -> Option<WorldPush> {
+    let rgb = &frame.rgb;
     let tote = PICK_TOTE;
     let target = heights.point(grasp.u, grasp.v);
     let occupied: Vec<Vector> = heights
@@ -279,7 +281,7 @@ mod tests {
         // close for the hand to start between them: the push leaves at an angle.
         let frame = blocks_frame(&camera, &[[55, 65, 58, 70], [68, 80, 56, 72]]);
         let heights = HeightMap::new(&camera, &frame);
-        let push = plan_push(&heights, &frame.rgb, grasp_at(60, 64)).expect("free floor all round");
+        let push = plan_push(&heights, &frame, grasp_at(60, 64)).expect("free floor all round");
         let target = heights.point(60, 64);
         let neighbour = heights.point(74, 64);
         let away = Vector::new(target.x - neighbour.x, target.y - neighbour.y, 0.0).normalize();
@@ -320,7 +322,7 @@ mod tests {
         let middle = (near + far) / 2;
         let target = heights.point(middle, 64);
         let push =
-            plan_push(&heights, &frame.rgb, grasp_at(middle, 64)).expect("a push along the wall");
+            plan_push(&heights, &frame, grasp_at(middle, 64)).expect("a push along the wall");
         let wall_normal = Vector::new(0.0, if target.y < tote.center[1] { 1.0 } else { -1.0 }, 0.0);
         let along_the_wall_or_off_it = push.direction().dot(wall_normal) >= 0.0;
         assert!(along_the_wall_or_off_it, "{push:?} runs into the wall");
@@ -343,7 +345,7 @@ mod tests {
         let heights = HeightMap::new(&camera, &frame);
         let target = heights.point(54, 64);
         let neighbour = heights.point(65, 64);
-        let push = plan_push(&heights, &frame.rgb, grasp_at(54, 64)).expect("free floor around");
+        let push = plan_push(&heights, &frame, grasp_at(54, 64)).expect("free floor around");
         let away = Vector::new(target.x - neighbour.x, target.y - neighbour.y, 0.0).normalize();
         assert!(
             push.direction().dot(away) > 0.5,
@@ -379,6 +381,6 @@ mod tests {
         let camera = Camera::top_down();
         let frame = blocks_frame(&camera, &[[0, 127, 0, 127]]);
         let heights = HeightMap::new(&camera, &frame);
-        assert_eq!(plan_push(&heights, &frame.rgb, grasp_at(64, 64)), None);
+        assert_eq!(plan_push(&heights, &frame, grasp_at(64, 64)), None);
     }
 }

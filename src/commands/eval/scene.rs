@@ -187,7 +187,7 @@ impl Evaluation<'_> {
         let sim_start = Instant::now();
         let push = match (&decision.grasp, decision.verified) {
             (Ok(g), Some(false)) if self.push_unverified => {
-                plan_push(&HeightMap::new(camera, frame), &frame.rgb, *g)
+                plan_push(&HeightMap::new(camera, frame), frame, *g)
             }
             _ => None,
         };
