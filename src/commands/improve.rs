@@ -13,12 +13,15 @@ use super::collect::CollectConfig;
 use super::eval::{pushes_by_default, EvalConfig};
 use super::train::TrainOptions;
 use super::{Context, RunBy};
+use crate::assets::objects::SplitFile;
 use crate::data::atomic::write_atomic;
 use crate::data::input::InputKind;
+use crate::data::seeds::{derived_seed, SeedOverflow};
 use crate::data::shard::Shard;
 use crate::data::trials::TrialStore;
 use crate::model::config::TrainConfig;
 use crate::model::unet::Precision;
+use crate::named::shell_word;
 use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;
 use crate::policy::PolicyKind;
@@ -79,6 +82,8 @@ struct EvalSummary {
 
 /// Runs the command.
 pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()> {
+    // The last round's seeds are the largest: when they fit, every round's do.
+    stage_seed(config.collect.seed.max(config.train.seed), config.rounds)?;
     let start_meta = crate::model::checkpoint::read(
         &config.start,
         "train the labelled model first (graspmap train), or pass --checkpoint PATH",
@@ -104,9 +109,9 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
         current = summary.model.clone();
     }
     context.say(&format!(
-        "the improved model is {}; evaluate it with graspmap eval --checkpoint {}",
+        "the improved model is {}; evaluate it with {}",
         current.display(),
-        current.display()
+        eval_hint(context, &current)
     ));
     if let Some(json) = &context.json {
         let resolved = serde_json::json!({
@@ -163,7 +168,7 @@ fn run_round(
     let collect_start = Instant::now();
     let collect = CollectConfig {
         out: dir.join("trials"),
-        seed: stage_seed(config.collect.seed, round),
+        seed: stage_seed(config.collect.seed, round)?,
         checkpoint: current.to_path_buf(),
         run_by: RunBy::Improve,
         ..config.collect.clone()
@@ -225,7 +230,7 @@ fn retrain(
     let model_dir = config.out.join(format!("round_{round:02}")).join("model");
     let train = TrainOptions {
         config: TrainConfig {
-            seed: stage_seed(config.train.seed, round),
+            seed: stage_seed(config.train.seed, round)?,
             input,
             ..config.train.clone()
         },
@@ -244,8 +249,8 @@ fn retrain(
 /// The seed of round `round`'s collection or training, from the one `seed` the user gave it:
 /// its own, so rounds never repeat a scene or a data order. (Not label's `rounds::round_seed`,
 /// the drop seed of a labelling round.)
-fn stage_seed(seed: u64, round: u32) -> u64 {
-    seed.wrapping_mul(1_000).wrapping_add(u64::from(round))
+fn stage_seed(seed: u64, round: u32) -> Result<u64, SeedOverflow> {
+    derived_seed(seed, 1_000, u64::from(round), "seed·1000 + r for round r")
 }
 
 /// empty_bin with the round's model and failure memory 8, reported into the round's folder.
@@ -302,6 +307,24 @@ fn evaluate(
         report,
         seconds: start.elapsed().as_secs_f64(),
     })
+}
+
+/// The command that evaluates `model` on the test objects, as printed to run: the data
+/// directory, objects and split of this run.
+fn eval_hint(context: &Context, model: &Path) -> String {
+    let word = |path: &Path| shell_word(&path.display().to_string());
+    let mut hint = format!(
+        "graspmap --data {} eval --task test --checkpoint {}",
+        word(&context.data),
+        word(model)
+    );
+    if let Some(dir) = context.objects.dir() {
+        hint += &format!(" --objects-dir {}", word(dir));
+    }
+    if let SplitFile::Path(split) = &context.split {
+        hint += &format!(" --split {}", word(split));
+    }
+    hint
 }
 
 fn round_line(summary: &RoundSummary) -> String {

@@ -20,5 +20,6 @@ pub(crate) mod observation;
 pub(crate) mod output;
 pub(crate) mod progress;
 pub(crate) mod relabel;
+pub(crate) mod seeds;
 pub mod shard;
 pub mod trials;

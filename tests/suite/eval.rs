@@ -302,15 +302,18 @@ fn empty_bin_counts_moved_left_and_lost_every_attempt() {
     let out = setup.oracle_empty_bin(2, &["--json", json.to_str().unwrap()]);
     assert_ok(&out);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    let progress: Vec<&str> = stdout
+    // The scene's progress goes to stderr; stdout carries the results.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let progress: Vec<&str> = stderr
         .lines()
         .filter(|l| l.ends_with("objects moved"))
         .collect();
-    assert!(!progress.is_empty() && progress.len() <= 2, "{stdout}");
+    assert!(!progress.is_empty() && progress.len() <= 2, "{stderr}");
     assert!(
         progress.iter().all(|l| l.contains("/2 objects moved")),
-        "{stdout}"
+        "{stderr}"
     );
+    assert!(!stdout.contains("objects moved\n"), "{stdout}");
     assert!(stdout.contains("objects left in the bin."), "{stdout}");
     let report = read_json(&json);
     assert_eq!(report["config"]["seeds"], serde_json::json!([2]));

@@ -104,6 +104,42 @@ fn the_reference_fixture_loads_and_round_trips() {
 }
 
 #[test]
+fn no_json_report_replaces_the_labelling_state() {
+    let ws = Workspace::new();
+    assert_ok(&ws.run(&["--per-object", "1"]));
+    let before = ws.snapshot();
+    for file in ["progress.json", "labels.json"] {
+        let target = ws.labels().join(file);
+        let out = Command::new(BIN)
+            .arg("--data")
+            .arg(ws.data())
+            .arg("--json")
+            .arg(&target)
+            .args(["eval", "--task", "test", "--policy", "random"])
+            .output()
+            .unwrap();
+        assert_user_error(&out, file);
+        // The same file outside the data directory is still recognised as state.
+        let copy = ws.dir.path().join(file);
+        std::fs::copy(&target, &copy).unwrap();
+        let out = Command::new(BIN)
+            .arg("--json")
+            .arg(&copy)
+            .args(["scene", "--objects", "YcbPear", "--force", "--out"])
+            .arg(ws.dir.path().join("scene.png"))
+            .output()
+            .unwrap();
+        assert_user_error(&out, "which graspmap reads");
+        assert_eq!(
+            std::fs::read(&copy).unwrap(),
+            std::fs::read(&target).unwrap()
+        );
+    }
+    assert_eq!(ws.snapshot(), before);
+    assert_ok(&ws.run(&["--check"]));
+}
+
+#[test]
 fn the_same_seed_gives_byte_identical_datasets_whatever_the_thread_count() {
     let a = Workspace::new();
     let b = Workspace::new();
@@ -413,10 +449,10 @@ fn ctrl_c_stops_after_the_current_round_and_the_rerun_finishes_the_same_dataset(
     wait_for(&ws.labels().join("labels.json"));
     crate::common::send_signal(&child, libc::SIGINT);
     let out = child.wait_with_output().unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(out.status.code(), Some(130), "stdout: {stdout}");
-    assert!(stdout.contains("interrupted by SIGINT"), "{stdout}");
-    assert!(stdout.contains("rerun the same command"), "{stdout}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "stderr: {stderr}");
+    assert!(stderr.contains("interrupted by SIGINT"), "{stderr}");
+    assert!(stderr.contains("rerun the same command"), "{stderr}");
     assert_ok(&ws.run(&["--check"]));
     assert_ok(&ws.run(&["--per-object", "3"]));
     assert_eq!(ws.snapshot(), reference.snapshot());

@@ -358,6 +358,14 @@ fn foreign_hosts_origins_big_bodies_and_bad_requests_get_4xx_and_the_server_keep
         ),
         ("POST", "/api/click", r#"{"x": 5}"#, 400, "= missing"),
         ("POST", "/api/rotate", r#"{"steps": "left"}"#, 400, "steps"),
+        // |i64::MIN| does not exist: a check by abs() would wrap and let it through.
+        (
+            "POST",
+            "/api/rotate",
+            r#"{"steps": -9223372036854775808}"#,
+            400,
+            "steps",
+        ),
         (
             "POST",
             "/api/confirm",
@@ -653,6 +661,18 @@ fn report_serve_shows_the_report_and_the_labels_and_deletes_only_under_the_lock(
     assert_eq!(get("/report_files/../labels/labels.json").0, 404);
     assert_eq!(get("/").0, 200);
     assert_eq!(get("/labels").0, 200);
+    // A page the user wrote where the report goes is theirs: /report leaves it as it is.
+    let page = data.join("report.html");
+    std::fs::write(&page, "<p>my notes</p>").unwrap();
+    let (status, text) = get("/report");
+    assert_eq!(status, 409, "{text}");
+    assert!(
+        text.contains("report.html") && text.contains("--force"),
+        "{text}"
+    );
+    assert_eq!(std::fs::read_to_string(&page).unwrap(), "<p>my notes</p>");
+    std::fs::remove_file(&page).unwrap();
+    assert_eq!(get("/report").0, 200);
     let listed: serde_json::Value = serde_json::from_str(&get("/api/labels").1).unwrap();
     assert_eq!(listed["total"], 2);
     // A labeller holding the store: the delete is refused, naming the lock.

@@ -29,8 +29,7 @@ use crate::present::eval_report::{report_lines, summarise, AttemptRecord, SceneR
 use crate::present::video::save_video_atomic;
 use crate::sim::WorkcellConfig;
 pub(crate) use config::{
-    pushes_by_default, EvalConfig, ATTEMPTS_PER_OBJECT, EPISODE_EVERY_STEPS,
-    SINGLE_OBJECT_SEED_OFFSET,
+    pushes_by_default, single_object_seed, EvalConfig, ATTEMPTS_PER_OBJECT, EPISODE_EVERY_STEPS,
 };
 use sweep::{
     announce_plan, comparable, finished_runs, keep_interrupted, kept_path, resolved_config,
@@ -191,6 +190,13 @@ fn plan(context: &Context, config: &EvalConfig) -> anyhow::Result<Plan> {
         Task::EmptyBin => split.all(),
     };
     let models = context.objects.load_all(&names)?;
+    if config.task != Task::EmptyBin {
+        // The last attempt of the last object has the largest seed: when it fits, all do.
+        let last = models.len().saturating_sub(1);
+        for &seed in &config.seeds {
+            single_object_seed(seed, last, ATTEMPTS_PER_OBJECT - 1)?;
+        }
+    }
     let vis_dir = context.data.join("affordance").join(match config.task {
         Task::Train => "eval_pick_training_vis",
         Task::Test => "eval_pick_testing_vis",
@@ -226,7 +232,7 @@ fn resumed(
     let kept = kept_path(context, config, names);
     let source = resume_source(context, &kept);
     let runs = finished_runs(source, config)?;
-    context.say(&format!(
+    context.note(&format!(
         "resuming: {} of {} already in {}",
         runs.len(),
         counted(scenes, "scene"),
@@ -342,7 +348,7 @@ impl Evaluation<'_> {
             |finished| match finished {
                 Finished::Scene(run, lines) => {
                     for line in &lines {
-                        self.bar.suspend(|| self.context.say(line));
+                        self.bar.suspend(|| self.context.note(line));
                     }
                     runs.push(run);
                 }

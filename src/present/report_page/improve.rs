@@ -9,6 +9,7 @@ use super::evals::details;
 use super::files::Files;
 use super::html::esc;
 use super::kept::{read_kept, Entry};
+use crate::named::shell_word;
 
 /// One round's folder and the evaluations kept in it.
 pub(crate) struct Round {
@@ -16,6 +17,8 @@ pub(crate) struct Round {
     pub(crate) number: u32,
     /// The evaluations of the round's model.
     pub(crate) entries: Vec<Entry>,
+    /// Its folder, `round_RR/`.
+    pub(crate) dir: PathBuf,
 }
 
 /// Every `round_RR/` under `DATA/improve`, in round order, with its kept evaluations.
@@ -36,7 +39,11 @@ pub(crate) fn read_rounds(data_dir: &Path) -> anyhow::Result<Vec<Round>> {
         .into_iter()
         .map(|(number, dir)| {
             let entries = read_kept(&dir, &format!("improve_round_{number:02}_"))?;
-            Ok(Round { number, entries })
+            Ok(Round {
+                number,
+                entries,
+                dir,
+            })
         })
         .collect()
 }
@@ -55,8 +62,19 @@ pub(crate) fn improve_section(
     for round in rounds {
         let _ = writeln!(html, "<h3>Round {}</h3>", round.number);
         if round.entries.is_empty() {
-            html.push_str(
-                "<p class=\"note\">No evaluation of this round's model: <code>graspmap improve --eval-seeds LIST</code> evaluates each round's.</p>\n",
+            // As improve --eval-seeds would have: the report kept in the round's folder.
+            let model = round.dir.join("model").join("best.safetensors");
+            let command = super::html::command(
+                &round.dir,
+                &format!(
+                    "eval --task empty_bin --n-past-action 8 --checkpoint {}",
+                    shell_word(&model.display().to_string())
+                ),
+            );
+            let _ = writeln!(
+                html,
+                "<p class=\"note\">No evaluation of this round's model: <code>{}</code> makes one.</p>",
+                esc(&command)
             );
         }
         for entry in &round.entries {

@@ -35,7 +35,7 @@ pub(crate) fn write_report_page(data_dir: &Path, out_html: &Path) -> anyhow::Res
             out_html.join("report.html").display()
         );
     }
-    let mut files = Files::new(out_html);
+    let mut files = Files::new(out_html, data_dir);
     let main = kept::read_kept(data_dir, "")?;
     let rounds = improve::read_rounds(data_dir)?;
     let (mut body, top) = summary::summary_section(&main, &rounds, &mut files)?;

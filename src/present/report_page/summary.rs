@@ -109,16 +109,21 @@ fn table_row(row: &Row, files: &mut Files) -> anyhow::Result<String> {
     }
     html.push_str("</th>");
     if row.settings.is_none() {
+        let [model, random, oracle] = ["model", "random", "oracle"].map(|policy| {
+            esc(&files.command(&format!(
+                "eval --task {} --policy {policy}",
+                row.task.name()
+            )))
+        });
         let _ = writeln!(
             html,
-            "<td class=\"none\" colspan=\"3\">not run yet: <code>graspmap eval --task {}</code>, then <code>--policy random</code> and <code>--policy oracle</code> for the baselines</td></tr>",
-            row.task.name()
+            "<td class=\"none\" colspan=\"3\">not run yet: <code>{model}</code>, and the baselines: <code>{random}</code>, <code>{oracle}</code></td></tr>",
         );
         return Ok(html);
     }
     html.push_str(&match row.model {
         Some(entry) => cell(entry, row.task, files)?,
-        None => not_run(row, PolicyKind::Model),
+        None => not_run(row, PolicyKind::Model, files),
     });
     let mut warnings = Vec::new();
     for policy in BASELINES {
@@ -141,7 +146,7 @@ fn table_row(row: &Row, files: &mut Files) -> anyhow::Result<String> {
                 });
                 cell(entry, row.task, files)?.replacen("<td>", "<td class=\"other\">⚠ ", 1)
             }
-            None => not_run(row, policy),
+            None => not_run(row, policy, files),
         });
     }
     html.push_str("</tr>\n");
@@ -241,16 +246,19 @@ fn cell(entry: &Entry, task: Task, files: &mut Files) -> anyhow::Result<String> 
 }
 
 /// The cell of a policy with no run yet: the command that makes one.
-fn not_run(row: &Row, policy: PolicyKind) -> String {
+fn not_run(row: &Row, policy: PolicyKind, files: &Files) -> String {
     let flags = row
         .settings
         .filter(|s| !s.is_default())
         .map_or_else(String::new, Comparable::eval_flags);
-    format!(
-        "<td class=\"none\">not run: <code>graspmap eval --task {} --policy {}{}</code></td>",
+    let command = files.command(&format!(
+        "eval --task {} --policy {}{flags}",
         row.task.name(),
-        policy.name(),
-        esc(&flags)
+        policy.name()
+    ));
+    format!(
+        "<td class=\"none\">not run: <code>{}</code></td>",
+        esc(&command)
     )
 }
 
@@ -288,7 +296,10 @@ fn first_media(
         None => {
             html.push_str(&super::html::missing(
                 "No episode video yet",
-                "graspmap eval --task empty_bin --n-past-action 8 --record DATA/demo/empty_bin.mp4",
+                &files.command(&format!(
+                    "eval --task empty_bin --n-past-action 8 --record {}",
+                    files.video_path("empty_bin.mp4")
+                )),
             ));
             None
         }
@@ -365,8 +376,12 @@ mod tests {
         assert!(!html.contains("⚠ random"));
         // The round's report and DATA's share a name; each keeps its own copy.
         assert!(html.contains("r_files/reports/improve_round_02_eval_empty_bin_model.json"));
-        assert!(html.contains(
-            "<td class=\"none\" colspan=\"3\">not run yet: <code>graspmap eval --task train</code>"
-        ));
+        let data = crate::named::shell_word(&data.display().to_string());
+        assert!(
+            html.contains(&format!(
+                "<td class=\"none\" colspan=\"3\">not run yet: <code>graspmap --data {data} eval --task train --policy model</code>"
+            )),
+            "{html}"
+        );
     }
 }
