@@ -529,6 +529,58 @@ mod tests {
     }
 
     #[test]
+    fn a_json_report_replaces_only_its_own_command_s_and_never_state() {
+        let dir = tempfile::tempdir().unwrap();
+        let write = |name: &str, text: &str| {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text).unwrap();
+            path
+        };
+        let eval = write(
+            "eval.json",
+            r#"{"schema": "graspmap.eval/2", "results": {}}"#,
+        );
+        let progress = write("p.json", r#"{"schema": "graspmap.label-progress/2"}"#);
+        let evaluation = write("e.json", r#"{"schema": "graspmap.evaluation/1"}"#);
+        let labels = write("l.json", r#"{"YcbHammer": [[75, 64, 45.0]]}"#);
+        let scene = write(
+            "t.json",
+            r#"{"scene": 0, "drop_seed": 1, "objects": [], "complete": true, "trials": []}"#,
+        );
+        let summary = write(
+            "s.json",
+            r#"[{"round": 1, "collected_with": "a", "model": "b"}]"#,
+        );
+        let mine = write("mine.json", r#"{"a": 1}"#);
+        let weights = write("w.safetensors", "x");
+        assert!(Kind::JsonReport("eval").holds(&eval));
+        assert!(!Kind::JsonReport("train").holds(&eval));
+        // A longer command name sharing the prefix is another command.
+        assert!(!Kind::JsonReport("eval").holds(&evaluation));
+        for state in [&progress, &evaluation, &labels, &scene, &summary, &weights] {
+            assert!(state_of(state, None).is_some(), "{state:?}");
+        }
+        for other in [&eval, &mine] {
+            assert_eq!(state_of(other, None), None, "{other:?}");
+        }
+        // Inside a data directory's state folders, any file is state.
+        let data = dir.path().join("data");
+        std::fs::create_dir_all(data.join("labels")).unwrap();
+        let image = data.join("labels").join("notes.txt");
+        std::fs::write(&image, "x").unwrap();
+        assert_eq!(state_of(&image, None), None);
+        assert!(state_of(&image, Some(&data)).is_some());
+        // Even with --force.
+        let files = RunFiles {
+            outputs: vec![FileOutput::new(&progress, "--out", Existing::Force)],
+            force: Some(true),
+            ..RunFiles::default()
+        };
+        let err = files.check().unwrap_err().to_string();
+        assert!(err.contains("which graspmap reads"), "{err}");
+    }
+
+    #[test]
     fn the_reason_is_said_once_without_the_error_code() {
         let e = std::io::Error::from_raw_os_error(libc::EACCES);
         assert_eq!(reason(&e), "permission denied");

@@ -313,8 +313,9 @@ fn empty_bin_counts_moved_left_and_lost_every_attempt() {
         progress.iter().all(|l| l.contains("/2 objects moved")),
         "{stderr}"
     );
+    assert!(stderr.contains("objects left in the bin."), "{stderr}");
     assert!(!stdout.contains("objects moved\n"), "{stdout}");
-    assert!(stdout.contains("objects left in the bin."), "{stdout}");
+    assert!(stdout.contains("left  lost"), "the results table: {stdout}");
     let report = read_json(&json);
     assert_eq!(report["config"]["seeds"], serde_json::json!([2]));
     let bin = &report["results"]["runs"][0]["bin"];
@@ -445,10 +446,10 @@ fn give_up_after_ends_a_scene_on_its_first_run_of_failures() {
         gave_up > 0,
         "the random policy fails twice in a row somewhere"
     );
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        stdout.contains("gave up after 2 failed attempts in a row."),
-        "{stdout}"
+        stderr.contains("gave up after 2 failed attempts in a row."),
+        "{stderr}"
     );
 }
 
@@ -645,12 +646,13 @@ fn ctrl_c_keeps_the_finished_scenes_and_resume_equals_an_uninterrupted_sweep() {
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_graspmap"))
         .args(sweep(&report))
         .env_remove("GRASPMAP_LOG")
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    // The first scene is done when it says how many objects it left.
-    let mut lines = std::io::BufReader::new(child.stdout.take().unwrap()).lines();
+    // The first scene is done when it says (on stderr, with what the run kept) how many
+    // objects it left.
+    let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
     for line in lines.by_ref() {
         if line.unwrap().ends_with("objects left in the bin.") {
             break;

@@ -459,6 +459,10 @@ fn ctrl_c_stops_after_the_current_round_and_the_rerun_finishes_the_same_dataset(
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "fault-injection"),
+    ignore = "injects faults: needs --features fault-injection, which ./test.sh turns on"
+)]
 fn a_full_disk_at_any_write_of_a_round_fails_clearly_and_the_rerun_resumes() {
     let reference = Workspace::new();
     assert_ok(&reference.run(&["--per-object", "1", "--threads", "1"]));

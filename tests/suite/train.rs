@@ -299,6 +299,10 @@ fn sigterm_abandons_the_epoch_in_progress_and_resume_stays_exact() {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "fault-injection"),
+    ignore = "injects faults: needs --features fault-injection, which ./test.sh turns on"
+)]
 fn a_full_disk_at_any_write_of_an_epoch_fails_clearly_and_leaves_a_resumable_run() {
     let reference = data_dir();
     assert_ok(&train(reference.path(), &["--epochs", "1"]));

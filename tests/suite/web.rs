@@ -473,6 +473,10 @@ fn deleting_a_label_renumbers_the_rest_and_the_next_round_refills_it() {
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "fault-injection"),
+    ignore = "injects faults: needs --features fault-injection, which ./test.sh turns on"
+)]
 fn a_delete_killed_at_any_step_leaves_the_old_or_the_new_dataset_and_both_pass_check() {
     let mut web = labelled("3");
     let data = web.data();

@@ -81,11 +81,14 @@ mod tests {
     fn an_empty_data_directory_gives_a_page_of_missing_parts() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("r.html");
-        let written = write_report_page(&dir.path().join("nothing"), &out).unwrap();
+        let data = dir.path().join("nothing");
+        let written = write_report_page(&data, &out).unwrap();
         assert_eq!(written, std::slice::from_ref(&out));
         let html = std::fs::read_to_string(&out).unwrap();
-        for command in ["graspmap label", "graspmap train", "graspmap eval --task"] {
-            assert!(html.contains(command), "{command} missing from {html}");
+        // Each names the data directory, so that it runs as printed from anywhere.
+        for command in ["label", "train --epochs 30", "eval --task train"] {
+            let command = html::command(&data, command);
+            assert!(html.contains(&command), "{command} missing from {html}");
         }
         assert!(!html.contains("{{"), "a placeholder is left");
     }
