@@ -337,15 +337,26 @@ mod tests {
     /// `home/reports`, as `eval` names the defaults' (the page reads the settings inside).
     fn keep(home: &Path, task: Task, policy: PolicyKind, seeds: &[u64], tag: &str) {
         let results = summarise(task, policy, seeds.to_vec(), &[], Vec::new(), 0.0, false);
-        let report = serde_json::json!({
-            "schema": "graspmap.eval/2",
-            "git_commit": "abc",
-            "config": { "global": { "data": home }, "seeds": seeds, "objects": ["YcbBanana"] },
-            "results": results,
+        // Every setting eval writes: the page reads kept reports as strictly as merge does.
+        let config = serde_json::json!({
+            "global": {
+                "data": home,
+                "objects_dir": "bundled:objects",
+                "split_path": "bundled:objects/split.json",
+            },
+            "task": task,
+            "policy": policy,
+            "seeds": seeds,
+            "objects": ["YcbBanana"],
+            "suppression": { "remember": 0 },
+            "max_attempts": 25,
+            "give_up_after": 0,
+            "record": null,
         });
         let name = format!("eval_{}_{}{tag}.json", task.name(), policy.name());
-        std::fs::create_dir_all(home.join("reports")).unwrap();
-        std::fs::write(home.join("reports").join(name), report.to_string()).unwrap();
+        let path = home.join("reports").join(name);
+        crate::present::envelope::write_versioned_report(&path, "eval", 2, 0, &config, &results)
+            .unwrap();
     }
 
     #[test]
