@@ -14,7 +14,6 @@ use super::eval::{pushes_by_default, EvalConfig};
 use super::train::TrainOptions;
 use super::{Context, RunBy};
 use crate::assets::objects::SplitFile;
-use crate::data::atomic::write_atomic;
 use crate::data::input::InputKind;
 use crate::data::seeds::{derived_seed, SeedOverflow};
 use crate::data::shard::Shard;
@@ -26,6 +25,7 @@ use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;
 use crate::policy::PolicyKind;
 use crate::present::eval_report::{EvalReport, Task};
+use crate::present::improve_summary::{self, EvalSummary, RoundSummary};
 use crate::present::kept_reports::DEFAULT_MAX_ATTEMPTS;
 
 /// The learning rate of a round's retraining. It starts from a model that already fits the
@@ -53,33 +53,6 @@ pub(crate) struct ImproveConfig {
     pub(crate) eval_seeds: Option<Vec<u64>>,
 }
 
-/// One round's line of `summary.json`.
-#[derive(Debug, Clone, serde::Serialize)]
-struct RoundSummary {
-    round: u32,
-    collected_with: PathBuf,
-    trials: usize,
-    successes: usize,
-    collection_success_rate: f64,
-    trials_so_far: usize,
-    best_val_loss: f64,
-    model: PathBuf,
-    collect_seconds: f64,
-    train_seconds: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    eval: Option<EvalSummary>,
-}
-
-/// The figures of a round's empty_bin evaluation.
-#[derive(Debug, Clone, serde::Serialize)]
-struct EvalSummary {
-    seeds: Vec<u64>,
-    moved_mean: f64,
-    pick_success_rate: f64,
-    report: PathBuf,
-    seconds: f64,
-}
-
 /// Runs the command.
 pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()> {
     // The last round's seeds are the largest: when they fit, every round's do.
@@ -90,6 +63,8 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
     )?
     .meta;
     let input = start_meta.map_or_else(Default::default, |m| m.config.input);
+    // So that `graspmap report` finds these rounds wherever --out put them.
+    improve_summary::record_run(&context.data, &config.out)?;
     let mut summaries: Vec<RoundSummary> = Vec::new();
     let mut current = config.start.clone();
     let mut stores: Vec<PathBuf> = Vec::new();
@@ -103,8 +78,8 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
         });
         let summary = summaries.last().expect("just pushed");
         let dir = config.out.join(format!("round_{round:02}"));
-        write_json(&dir.join("summary.json"), summary)?;
-        write_json(&config.out.join("summary.json"), &summaries)?;
+        improve_summary::write(&dir.join(improve_summary::FILE), summary)?;
+        improve_summary::write(&config.out.join(improve_summary::FILE), &summaries)?;
         context.say(&round_line(summary));
         current = summary.model.clone();
     }
@@ -345,9 +320,4 @@ fn round_line(summary: &RoundSummary) -> String {
         );
     }
     line
-}
-
-fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> {
-    let text = serde_json::to_string_pretty(value)? + "\n";
-    write_atomic(path, text.as_bytes())
 }

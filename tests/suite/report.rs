@@ -219,39 +219,13 @@ fn suggested_commands(html: &str) -> Vec<String> {
     found
 }
 
-/// A command line split into words as a POSIX shell would: blanks separate, single quotes
-/// quote (the page quotes nothing else).
-fn shell_words(line: &str) -> Vec<String> {
-    let mut words = Vec::new();
-    let (mut word, mut quoted, mut started) = (String::new(), false, false);
-    for c in line.chars() {
-        match c {
-            '\'' => (quoted, started) = (!quoted, true),
-            ' ' if !quoted => {
-                if started {
-                    words.push(std::mem::take(&mut word));
-                }
-                started = false;
-            }
-            c => {
-                word.push(c);
-                started = true;
-            }
-        }
-    }
-    if started {
-        words.push(word);
-    }
-    words
-}
-
 /// Runs each command as printed. A command that ends within a few seconds must succeed; one
 /// still working then is past every check of its flags, files and seeds (those take well
 /// under a second), and is stopped with Ctrl-C, which it must take as an interruption.
 fn runs_as_printed(commands: &[String]) {
     assert!(commands.len() >= 5, "{commands:?}");
     for command in commands {
-        let words = shell_words(command);
+        let words = crate::common::shell_words(command);
         assert_eq!(words[0], "graspmap", "{command}");
         let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_graspmap"))
             .args(&words[1..])

@@ -48,7 +48,7 @@ pub(crate) fn write_report_page(data_dir: &Path, out_html: &Path) -> anyhow::Res
         "Evaluations: every kept report, its tables, pictures and video",
         &evals,
     ));
-    let improve = improve::improve_section(data_dir, &rounds, &mut files)?;
+    let improve = improve::improve_section(&rounds, &mut files)?;
     if !improve.is_empty() {
         body.push_str(&fold("Learning from trials: the improve rounds", &improve));
     }

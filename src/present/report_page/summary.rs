@@ -78,7 +78,7 @@ pub(crate) fn summary_section(
             let pool = groups(main.iter().filter(|e| e.task == entry.task));
             rows.push(Row {
                 task: entry.task,
-                label: format!("improve round {}: {}", round.number, entry.task.name()),
+                label: format!("{}: {}", round.name, entry.task.name()),
                 model: Some(entry),
                 settings: Some(&entry.settings),
                 pool: pool.into_iter().flatten().collect(),
