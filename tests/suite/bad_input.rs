@@ -565,6 +565,13 @@ const CASES: &[Case] = &[
         2,
         "--threads is not used",
     ),
+    // --quiet: the results, not the scene's progress.
+    case(
+        "--data {data} --quiet eval --task empty_bin --policy oracle --max-attempts 1",
+        0,
+        "objects moved: ",
+    )
+    .without("/15 objects moved"),
     // The smaller slips.
     case("--data {data} train --epochs -1", 2, "--epochs"),
     case(

@@ -225,6 +225,42 @@ fn resuming_asks_for_the_same_settings() {
 }
 
 #[test]
+fn warnings_carry_no_colour_codes_when_stderr_is_not_a_terminal() {
+    let ws = Workspace::new();
+    let labels = ws.labels();
+    std::fs::create_dir_all(&labels).unwrap();
+    for entry in std::fs::read_dir(fixture()).unwrap().flatten() {
+        std::fs::copy(entry.path(), labels.join(entry.file_name())).unwrap();
+    }
+    let split = ws.dir.path().join("fixture_split.json");
+    std::fs::write(
+        &split,
+        r#"{"train": ["YcbHammer", "YcbTomatoSoupCan"], "test": []}"#,
+    )
+    .unwrap();
+    // The fixture has its 2 labels per object and no progress file: a warning, no work.
+    let out = Command::new(BIN)
+        .arg("--data")
+        .arg(ws.data())
+        .arg("--split")
+        .arg(&split)
+        .args(["label", "--per-object", "2"])
+        .env_remove("GRASPMAP_LOG")
+        .output()
+        .unwrap();
+    assert_ok(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("WARN") && stderr.contains("no progress file"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains('\x1b'),
+        "colour codes in a file: {stderr:?}"
+    );
+}
+
+#[test]
 fn check_reports_each_kind_of_corruption() {
     let ws = Workspace::new();
     let labels = ws.labels();
