@@ -387,7 +387,16 @@ impl RunFiles {
                     path: path.clone(),
                 });
             }
-            if let Some(state) = state_of(path, self.data.as_deref()) {
+            // An earlier preview, video or page of the output's own kind is the command's own,
+            // wherever it lies (label --interactive's preview sits in the labels folder).
+            let own_kind = match output.existing {
+                Existing::Own(kind) | Existing::Earlier(kind) => {
+                    !matches!(kind, Kind::JsonReport(_)) && kind.holds(path)
+                }
+                _ => false,
+            };
+            let state = state_of(path, self.data.as_deref()).filter(|_| !own_kind);
+            if let Some(state) = state {
                 return Err(OutputError::IsState {
                     what: what.clone(),
                     path: path.clone(),
@@ -570,6 +579,19 @@ mod tests {
         std::fs::write(&image, "x").unwrap();
         assert_eq!(state_of(&image, None), None);
         assert!(state_of(&image, Some(&data)).is_some());
+        // The labelling preview is label's own, in the labels folder.
+        let preview = data.join("labels").join("preview.png");
+        image::RgbImage::new(512, 512).save(&preview).unwrap();
+        let files = RunFiles {
+            outputs: vec![FileOutput::new(
+                &preview,
+                "--preview",
+                Existing::Own(Kind::Preview),
+            )],
+            data: Some(data.clone()),
+            ..RunFiles::default()
+        };
+        files.check().unwrap();
         // Even with --force.
         let files = RunFiles {
             outputs: vec![FileOutput::new(&progress, "--out", Existing::Force)],
