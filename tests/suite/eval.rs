@@ -37,7 +37,11 @@ impl Setup {
     pub(crate) fn run(&self, args: &[&str]) -> std::process::Output {
         let data = self.dir.path().to_str().unwrap().to_owned();
         let split = self.path("split.json").to_str().unwrap().to_owned();
-        let mut all = vec!["--data", &data, "--threads", "2"];
+        // scene and grasp neither read a data directory nor use threads, and refuse both.
+        let mut all = match args.first() {
+            Some(&"scene" | &"grasp") => Vec::new(),
+            _ => vec!["--data", &data, "--threads", "2"],
+        };
         if args.iter().any(|a| *a == "eval" || *a == "label") {
             all.extend(["--split", split.as_str()]);
         }
