@@ -62,11 +62,38 @@ macro_rules! named_enum {
 }
 pub(crate) use named_enum;
 
+/// A path or value as one shell word, so that a printed command runs as printed: as it is when
+/// the shell would leave it alone, else in single quotes.
+pub(crate) fn shell_word(text: &str) -> String {
+    let plain = !text.is_empty()
+        && text
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || "_-./,:=+@%".contains(c));
+    match plain {
+        true => text.to_owned(),
+        false => format!("'{}'", text.replace('\'', r"'\''")),
+    }
+}
+
 /// "1 label", "2 labels": a count and its noun, plural unless the count is one.
 pub(crate) fn counted(n: usize, noun: &str) -> String {
     if n == 1 {
         format!("1 {noun}")
     } else {
         format!("{n} {noun}s")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::shell_word;
+
+    #[test]
+    fn shell_words_quote_only_what_the_shell_would_split_or_expand() {
+        assert_eq!(shell_word("data/run-1.json"), "data/run-1.json");
+        assert_eq!(shell_word("my data"), "'my data'");
+        assert_eq!(shell_word("it's"), r"'it'\''s'");
+        assert_eq!(shell_word("$HOME"), "'$HOME'");
+        assert_eq!(shell_word(""), "''");
     }
 }

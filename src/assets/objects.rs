@@ -94,6 +94,11 @@ impl ObjectLibrary {
         }
     }
 
+    /// The folder of the models; `None` for the bundled ones.
+    pub(crate) fn dir(&self) -> Option<&Path> {
+        self.dir.as_deref()
+    }
+
     /// Where the models come from, for messages and reports: the directory, or
     /// `bundled:objects`.
     pub(crate) fn location(&self) -> PathBuf {

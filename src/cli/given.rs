@@ -42,6 +42,14 @@ impl Given {
     }
 }
 
+/// Refuses the first typed flag of `ids`, global flags that `command` never reads.
+pub(crate) fn refuse_unread(given: &Given, command: &str, ids: &[&str]) -> anyhow::Result<()> {
+    if let Some(flag) = given.first_of(ids) {
+        anyhow::bail!("{flag} is not used by `graspmap {command}`; leave it out");
+    }
+    Ok(())
+}
+
 /// Refuses the first typed flag of `ids`, which applies only to `applies_to` while this run is
 /// `this_run` (both as flags would spell them, e.g. "--task empty_bin").
 pub(crate) fn refuse_inapplicable(

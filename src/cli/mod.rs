@@ -363,8 +363,10 @@ pub fn run() -> anyhow::Result<()> {
         split: cli.global.split.clone(),
     };
     let scoped = cli.command.scoped().resolve(cli.command.name(), before)?;
-    let context = cli.global.context(scoped)?;
-    dispatch(&context, cli.command, &Given::of(&matches))
+    let given = Given::of(&matches);
+    given::refuse_unread(&given, cli.command.name(), cli.command.unread_globals())?;
+    let context = cli.global.context(cli.command.name(), scoped)?;
+    dispatch(&context, cli.command, &given)
 }
 
 /// A command line clap refused (or `--help`, `--version`): one line on stderr, exit status 2.
@@ -529,6 +531,15 @@ impl Command {
         }
     }
 
+    /// The global flags the command never reads: refused when typed, so that none does nothing.
+    fn unread_globals(&self) -> &'static [&'static str] {
+        match self {
+            // One simulation on one thread, and nothing read from or written to the data dir.
+            Command::Scene(_) | Command::Grasp(_) => &["data", "threads"],
+            _ => &[],
+        }
+    }
+
     /// The scoped flags the command takes, as given after its name.
     fn scoped(&self) -> Scoped<'_> {
         match self {
@@ -557,9 +568,11 @@ fn init_logging(quiet: bool) {
     let default = if quiet { "warn" } else { "info" };
     let filter = tracing_subscriber::EnvFilter::try_from_env("GRASPMAP_LOG")
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new(default));
+    use std::io::IsTerminal as _;
     let _ = tracing_subscriber::fmt()
         .with_env_filter(filter)
         .with_writer(std::io::stderr)
+        .with_ansi(std::io::stderr().is_terminal())
         .without_time()
         .with_target(false)
         .try_init();

@@ -28,13 +28,14 @@ use crate::present::report_page::files_dir;
 pub(super) fn base(context: &Context, force: Option<bool>) -> RunFiles {
     let mut files = RunFiles {
         force,
+        data: Some(context.data.clone()),
         ..RunFiles::default()
     };
     files.protect_kept_reports(&context.data);
     files.output(
         context.json.as_deref(),
         "--json",
-        Existing::Own(Kind::JsonReport),
+        Existing::Earlier(Kind::JsonReport(context.command)),
     );
     files
 }
@@ -122,6 +123,7 @@ pub(super) fn merge(
     config: &MergeConfig,
     force: bool,
 ) -> anyhow::Result<RunFiles> {
+    crate::commands::merge::check_inputs(&config.inputs)?;
     let mut files = base(context, Some(force));
     for input in &config.inputs {
         files.input(&format!("the input {}", input.display()), Some(input));
@@ -170,12 +172,8 @@ pub(super) fn report(
     named: bool,
 ) -> anyhow::Result<RunFiles> {
     let mut files = base(context, Some(force));
-    let existing = if named {
-        Existing::Own(Kind::ReportPage)
-    } else {
-        Existing::Replace
-    };
-    files.output(Some(&config.out), "--out", existing);
+    // The default page too: DATA/report.html may be a page the user wrote.
+    files.output(Some(&config.out), "--out", Existing::Own(Kind::ReportPage));
     let folder = files_dir(&config.out);
     let data = identity(&context.data);
     if identity(&folder) == data || data.starts_with(identity(&folder)) {

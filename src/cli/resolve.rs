@@ -36,7 +36,11 @@ use crate::sim::WorkcellConfig;
 impl GlobalArgs {
     /// The settings every command shares, from the global flags and the scoped flags the
     /// command took (wherever they were given).
-    pub(super) fn context(&self, scoped: Resolved) -> anyhow::Result<Context> {
+    pub(super) fn context(
+        &self,
+        command: &'static str,
+        scoped: Resolved,
+    ) -> anyhow::Result<Context> {
         let objects = match &scoped.objects_dir {
             Some(dir) if !dir.is_dir() => bail!(
                 "--objects-dir {} is not a directory (it should hold <Name>/model.urdf)",
@@ -60,6 +64,7 @@ impl GlobalArgs {
             threads,
             json: self.json.clone(),
             quiet: self.quiet,
+            command,
         })
     }
 }

@@ -71,7 +71,9 @@ pub(crate) fn objects_in_bin(cell: &Workcell) -> Vec<u16> {
 }
 
 /// The seed of the policy's own stream for attempt `attempt` of a scene: one per attempt,
-/// independent of the drop.
+/// independent of the drop. A hash of the drop seed, not a seed a user gives or a sequence of
+/// them (data::seeds): collect's drop seeds are random 64-bit numbers, so it wraps by design,
+/// and every recorded trial and report depends on these exact values.
 fn attempt_seed(drop_seed: u64, attempt: u32) -> u64 {
     drop_seed
         .wrapping_mul(1_000)

@@ -163,7 +163,7 @@ pub(crate) fn run(context: &Context, config: CollectConfig) -> anyhow::Result<()
     let interrupted = interrupt::requested().filter(|_| finished < todo.len());
     bar.finish_and_clear();
     if let Some(interrupted) = interrupted {
-        context.say(&format!(
+        context.stopped(&format!(
             "{interrupted}: {} keeps every finished attempt; rerun the same command to continue (unfinished scenes are redone from their seeds)",
             store.dir().display()
         ));
@@ -187,7 +187,7 @@ fn unfinished(context: &Context, store: &TrialStore, mine: &[u64]) -> anyhow::Re
     }
     let done = mine.len() - todo.len();
     if done > 0 {
-        context.say(&format!(
+        context.note(&format!(
             "resuming: {} of {} already in {}",
             done,
             counted(mine.len(), "scene"),

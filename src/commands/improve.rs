@@ -13,16 +13,19 @@ use super::collect::CollectConfig;
 use super::eval::{pushes_by_default, EvalConfig};
 use super::train::TrainOptions;
 use super::{Context, RunBy};
-use crate::data::atomic::write_atomic;
+use crate::assets::objects::SplitFile;
 use crate::data::input::InputKind;
+use crate::data::seeds::{derived_seed, SeedOverflow};
 use crate::data::shard::Shard;
 use crate::data::trials::TrialStore;
 use crate::model::config::TrainConfig;
 use crate::model::unet::Precision;
+use crate::named::shell_word;
 use crate::policy::model::ModelPolicyConfig;
 use crate::policy::suppression::SuppressionConfig;
 use crate::policy::PolicyKind;
 use crate::present::eval_report::{EvalReport, Task};
+use crate::present::improve_summary::{self, EvalSummary, RoundSummary};
 use crate::present::kept_reports::DEFAULT_MAX_ATTEMPTS;
 
 /// The learning rate of a round's retraining. It starts from a model that already fits the
@@ -50,41 +53,18 @@ pub(crate) struct ImproveConfig {
     pub(crate) eval_seeds: Option<Vec<u64>>,
 }
 
-/// One round's line of `summary.json`.
-#[derive(Debug, Clone, serde::Serialize)]
-struct RoundSummary {
-    round: u32,
-    collected_with: PathBuf,
-    trials: usize,
-    successes: usize,
-    collection_success_rate: f64,
-    trials_so_far: usize,
-    best_val_loss: f64,
-    model: PathBuf,
-    collect_seconds: f64,
-    train_seconds: f64,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    eval: Option<EvalSummary>,
-}
-
-/// The figures of a round's empty_bin evaluation.
-#[derive(Debug, Clone, serde::Serialize)]
-struct EvalSummary {
-    seeds: Vec<u64>,
-    moved_mean: f64,
-    pick_success_rate: f64,
-    report: PathBuf,
-    seconds: f64,
-}
-
 /// Runs the command.
 pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()> {
+    // The last round's seeds are the largest: when they fit, every round's do.
+    stage_seed(config.collect.seed.max(config.train.seed), config.rounds)?;
     let start_meta = crate::model::checkpoint::read(
         &config.start,
         "train the labelled model first (graspmap train), or pass --checkpoint PATH",
     )?
     .meta;
     let input = start_meta.map_or_else(Default::default, |m| m.config.input);
+    // So that `graspmap report` finds these rounds wherever --out put them.
+    improve_summary::record_run(&context.data, &config.out)?;
     let mut summaries: Vec<RoundSummary> = Vec::new();
     let mut current = config.start.clone();
     let mut stores: Vec<PathBuf> = Vec::new();
@@ -98,15 +78,15 @@ pub(crate) fn run(context: &Context, config: ImproveConfig) -> anyhow::Result<()
         });
         let summary = summaries.last().expect("just pushed");
         let dir = config.out.join(format!("round_{round:02}"));
-        write_json(&dir.join("summary.json"), summary)?;
-        write_json(&config.out.join("summary.json"), &summaries)?;
+        improve_summary::write(&dir.join(improve_summary::FILE), summary)?;
+        improve_summary::write(&config.out.join(improve_summary::FILE), &summaries)?;
         context.say(&round_line(summary));
         current = summary.model.clone();
     }
     context.say(&format!(
-        "the improved model is {}; evaluate it with graspmap eval --checkpoint {}",
+        "the improved model is {}; evaluate it with {}",
         current.display(),
-        current.display()
+        eval_hint(context, &current)
     ));
     if let Some(json) = &context.json {
         let resolved = serde_json::json!({
@@ -163,7 +143,7 @@ fn run_round(
     let collect_start = Instant::now();
     let collect = CollectConfig {
         out: dir.join("trials"),
-        seed: stage_seed(config.collect.seed, round),
+        seed: stage_seed(config.collect.seed, round)?,
         checkpoint: current.to_path_buf(),
         run_by: RunBy::Improve,
         ..config.collect.clone()
@@ -225,7 +205,7 @@ fn retrain(
     let model_dir = config.out.join(format!("round_{round:02}")).join("model");
     let train = TrainOptions {
         config: TrainConfig {
-            seed: stage_seed(config.train.seed, round),
+            seed: stage_seed(config.train.seed, round)?,
             input,
             ..config.train.clone()
         },
@@ -244,8 +224,8 @@ fn retrain(
 /// The seed of round `round`'s collection or training, from the one `seed` the user gave it:
 /// its own, so rounds never repeat a scene or a data order. (Not label's `rounds::round_seed`,
 /// the drop seed of a labelling round.)
-fn stage_seed(seed: u64, round: u32) -> u64 {
-    seed.wrapping_mul(1_000).wrapping_add(u64::from(round))
+fn stage_seed(seed: u64, round: u32) -> Result<u64, SeedOverflow> {
+    derived_seed(seed, 1_000, u64::from(round), "seed·1000 + r for round r")
 }
 
 /// empty_bin with the round's model and failure memory 8, reported into the round's folder.
@@ -305,6 +285,24 @@ fn evaluate(
     })
 }
 
+/// The command that evaluates `model` on the test objects, as printed to run: the data
+/// directory, objects and split of this run.
+fn eval_hint(context: &Context, model: &Path) -> String {
+    let word = |path: &Path| shell_word(&path.display().to_string());
+    let mut hint = format!(
+        "graspmap --data {} eval --task test --checkpoint {}",
+        word(&context.data),
+        word(model)
+    );
+    if let Some(dir) = context.objects.dir() {
+        hint += &format!(" --objects-dir {}", word(dir));
+    }
+    if let SplitFile::Path(split) = &context.split {
+        hint += &format!(" --split {}", word(split));
+    }
+    hint
+}
+
 fn round_line(summary: &RoundSummary) -> String {
     let mut line = format!(
         "round {}: {} trials ({:.1} % succeeded), best validation loss {:.5}, collect {:.0} s, train {:.0} s",
@@ -323,9 +321,4 @@ fn round_line(summary: &RoundSummary) -> String {
         );
     }
     line
-}
-
-fn write_json(path: &Path, value: &impl serde::Serialize) -> anyhow::Result<()> {
-    let text = serde_json::to_string_pretty(value)? + "\n";
-    write_atomic(path, text.as_bytes())
 }

@@ -25,27 +25,40 @@ pub(crate) struct MergeConfig {
     pub(crate) allow_partial: bool,
 }
 
+/// Refuses, before any work, inputs that are neither a regular file nor a folder (`/dev/null`,
+/// a FIFO, a socket: reading one would block or yield nothing), and inputs that do not exist.
+pub(crate) fn check_inputs(inputs: &[PathBuf]) -> anyhow::Result<()> {
+    for path in inputs {
+        match std::fs::metadata(path) {
+            Err(_) => bail!(
+                "{}: not found; give the shards' eval reports (files) or trial stores (folders)",
+                path.display()
+            ),
+            Ok(meta) if !meta.is_file() && !meta.is_dir() => bail!(
+                "{} is neither a regular file nor a folder (a device, FIFO or socket); give the shards' eval reports (files) or trial stores (folders)",
+                path.display()
+            ),
+            Ok(_) => {}
+        }
+    }
+    Ok(())
+}
+
 /// Runs the command: eval reports when the inputs are files, trial stores when they are
 /// folders.
 pub(crate) fn run(context: &Context, config: MergeConfig) -> anyhow::Result<()> {
-    let files = config.inputs.iter().filter(|p| p.is_file()).count();
-    if files == config.inputs.len() {
-        return merge_reports(context, &config);
-    }
-    if let Some(missing) = config.inputs.iter().find(|p| !p.exists()) {
-        bail!(
-            "{}: not found; give the shards' eval reports (files) or trial stores (folders)",
-            missing.display()
-        );
-    }
-    if files > 0 {
-        bail!(
+    check_inputs(&config.inputs)?;
+    let file = config.inputs.iter().find(|p| p.is_file());
+    let folder = config.inputs.iter().find(|p| p.is_dir());
+    match (file, folder) {
+        (Some(file), Some(folder)) => bail!(
             "merge takes either eval reports (files) or trial stores (folders), not both; {} is a file and {} a folder",
-            config.inputs.iter().find(|p| p.is_file()).expect("counted").display(),
-            config.inputs.iter().find(|p| p.is_dir()).expect("counted").display()
-        );
+            file.display(),
+            folder.display()
+        ),
+        (Some(_), None) => merge_reports(context, &config),
+        (None, _) => merge_stores(context, &config),
     }
-    merge_stores(context, &config)
 }
 
 /// One shard's eval report, read and checked.

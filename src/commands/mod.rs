@@ -46,6 +46,9 @@ pub(crate) struct Context {
     pub(crate) json: Option<PathBuf>,
     /// No progress output.
     pub(crate) quiet: bool,
+    /// The subcommand as typed (`eval`, …): its `--json` report's schema is
+    /// `graspmap.<command>/N`.
+    pub(crate) command: &'static str,
 }
 
 /// How the context appears as `"global"` in every report: the same keys as ever, with the
@@ -86,6 +89,20 @@ impl Context {
         } else {
             writeln!(std::io::stdout().lock(), "{line}")
         };
+    }
+
+    /// A line about the run rather than its results (resuming, nothing to do, a scene's
+    /// progress): to stderr, so that stdout carries results only, and not under `--quiet`.
+    pub(crate) fn note(&self, line: &str) {
+        if !self.quiet {
+            eprintln!("{line}");
+        }
+    }
+
+    /// What a stopped run kept and how to continue it: to stderr, with the error it ends with,
+    /// under `--quiet` too.
+    pub(crate) fn stopped(&self, line: &str) {
+        eprintln!("{line}");
     }
 
     /// A progress bar with ETA over `len` `unit`s, `done` already: drawn on a terminal,

@@ -1,18 +1,22 @@
 //! Atomic file writes: a temporary file beside the target, synced, then renamed over it, so a
 //! killed process leaves either the old file or the new one, never a torn one.
 //!
-//! Every file the tool writes goes through [`write_atomic`]. For the full-disk tests, the
-//! environment variable `GRASPMAP_TEST_FAIL_WRITE=N` makes the process's N-th write fail with
-//! ENOSPC (`N:eio` for EIO), as a full or failing disk would.
+//! Every file the tool writes goes through [`write_atomic`]. For the full-disk tests, in a build
+//! with the `fault-injection` feature (never a release users run), the environment variable
+//! `GRASPMAP_TEST_FAIL_WRITE=N` makes the process's N-th write fail with ENOSPC (`N:eio` for
+//! EIO), as a full or failing disk would.
 
 use std::io::Write;
 use std::path::Path;
+#[cfg(feature = "fault-injection")]
 use std::sync::atomic::{AtomicU64, Ordering};
+#[cfg(feature = "fault-injection")]
 use std::sync::OnceLock;
 
 use anyhow::Context;
 
 /// The injected write failure, if the environment asks for one: (write number, errno).
+#[cfg(feature = "fault-injection")]
 fn fault_plan() -> Option<(u64, i32)> {
     static PLAN: OnceLock<Option<(u64, i32)>> = OnceLock::new();
     *PLAN.get_or_init(|| {
@@ -27,7 +31,14 @@ fn fault_plan() -> Option<(u64, i32)> {
     })
 }
 
+/// Without the feature, no write is made to fail.
+#[cfg(not(feature = "fault-injection"))]
+fn injected_fault() -> Option<std::io::Error> {
+    None
+}
+
 /// The error this write must fail with under fault injection.
+#[cfg(feature = "fault-injection")]
 fn injected_fault() -> Option<std::io::Error> {
     static WRITES: AtomicU64 = AtomicU64::new(0);
     let (at, errno) = fault_plan()?;

@@ -21,5 +21,6 @@ pub(crate) mod output;
 pub(crate) mod progress;
 pub(crate) mod relabel;
 pub mod scene_file;
+pub(crate) mod seeds;
 pub mod shard;
 pub mod trials;

@@ -4,10 +4,12 @@
 //! names the path, says why and gives the fix, not after an hour of simulation.
 //!
 //! The check creates the folders an output needs (a missing parent folder is created, not
-//! refused) and probes each folder with a file that it removes at once. [`check_outputs`] also
-//! makes sure that no output replaces one of the command's inputs (never, even with `--force`),
-//! another output of the same run, or an existing file that is not an earlier output of the
-//! same kind (unless `--force`).
+//! refused) and probes each folder with a file that it removes at once. [`RunFiles::check`] also
+//! makes sure that no output replaces one of the command's inputs or a file graspmap reads as
+//! state (labels, progress, trial stores, models, improve summaries: never, even with
+//! `--force`), another output of the same run, or an existing file that is not an earlier
+//! output of the same kind (unless `--force`; a `--json` report never replaces anything but an
+//! earlier report of the same command).
 
 use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
@@ -24,6 +26,13 @@ pub enum OutputError {
         what: String,
         path: PathBuf,
         input: String,
+    },
+    /// The file is one that graspmap reads as state.
+    #[error("{what} {path} is {state}, which graspmap reads; write the output to another path (--force never replaces it)")]
+    IsState {
+        what: String,
+        path: PathBuf,
+        state: String,
     },
     /// Two outputs of one run name the same file.
     #[error("{what} and {other} both name {path}; give each output its own path")]
@@ -117,6 +126,8 @@ pub(crate) enum Existing {
     Replace,
     /// Replaced when it is an earlier output of this kind, else only with `--force`.
     Own(Kind),
+    /// Replaced only when it is an earlier output of this kind; `--force` does not reach it.
+    Earlier(Kind),
     /// Replaced only with `--force`.
     Force,
 }
@@ -124,8 +135,8 @@ pub(crate) enum Existing {
 /// Kinds of output that a rerun replaces without `--force`: what graspmap wrote there before.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) enum Kind {
-    /// A `--json` report (`"schema": "graspmap.…"`).
-    JsonReport,
+    /// A `--json` report of this command (`"schema": "graspmap.<command>/N"`).
+    JsonReport(&'static str),
     /// A `--record` video (MP4 or GIF).
     Video,
     /// `graspmap report`'s page.
@@ -135,20 +146,27 @@ pub(crate) enum Kind {
 }
 
 impl Kind {
-    fn name(self) -> &'static str {
+    fn name(self) -> String {
         match self {
-            Kind::JsonReport => "graspmap report",
-            Kind::Video => "video",
-            Kind::ReportPage => "graspmap report page",
-            Kind::Preview => "labelling preview",
+            Kind::JsonReport(command) => format!("graspmap {command} report"),
+            Kind::Video => "video".to_owned(),
+            Kind::ReportPage => "graspmap report page".to_owned(),
+            Kind::Preview => "labelling preview".to_owned(),
         }
     }
 
     /// Whether the file at `path` is an earlier output of this kind.
-    fn holds(self, path: &Path) -> bool {
+    pub(crate) fn holds(self, path: &Path) -> bool {
         use std::io::Read as _;
-        if self == Kind::Preview {
-            return image::image_dimensions(path).is_ok_and(|d| d == (512, 512));
+        match self {
+            Kind::Preview => return image::image_dimensions(path).is_ok_and(|d| d == (512, 512)),
+            Kind::JsonReport(command) => {
+                return schema_of(path).is_some_and(|s| {
+                    s.strip_prefix(&format!("graspmap.{command}/"))
+                        .is_some_and(|v| !v.is_empty() && v.bytes().all(|b| b.is_ascii_digit()))
+                })
+            }
+            _ => {}
         }
         let mut head = Vec::new();
         let read = std::fs::File::open(path).and_then(|f| f.take(2048).read_to_end(&mut head));
@@ -157,14 +175,114 @@ impl Kind {
         }
         let text = String::from_utf8_lossy(&head);
         match self {
-            Kind::JsonReport => {
-                text.trim_start().starts_with('{') && text.contains("\"schema\": \"graspmap.")
-            }
             Kind::Video => head.starts_with(b"GIF8") || head.get(4..8) == Some(b"ftyp"),
             Kind::ReportPage => text.contains("<title>graspmap run report</title>"),
-            Kind::Preview => false,
+            Kind::Preview | Kind::JsonReport(_) => false,
         }
     }
+}
+
+/// The commands whose `--json` reports carry the schema `graspmap.<command>/N`. Every other
+/// graspmap schema (label progress, trial stores, checkpoints, …) names a file that graspmap
+/// reads as state.
+const REPORTING_COMMANDS: [&str; 11] = [
+    "scene", "grasp", "label", "train", "eval", "collect", "merge", "improve", "predict", "report",
+    "bench",
+];
+
+/// Largest JSON file read to tell what it is; graspmap's own state files are far smaller.
+const MAX_JSON_PEEK: u64 = 64 << 20;
+
+/// The file as JSON, when it is a JSON file of reasonable size.
+fn json_of(path: &Path) -> Option<serde_json::Value> {
+    let meta = std::fs::metadata(path).ok()?;
+    if !meta.is_file() || meta.len() > MAX_JSON_PEEK {
+        return None;
+    }
+    serde_json::from_slice(&std::fs::read(path).ok()?).ok()
+}
+
+/// The `schema` of a JSON file, when it has one.
+fn schema_of(path: &Path) -> Option<String> {
+    json_of(path)?.get("schema")?.as_str().map(str::to_owned)
+}
+
+/// The state folders of a data directory: every file in them is read by some command.
+const STATE_FOLDERS: [(&str, &str); 4] = [
+    ("labels", "part of the labelled dataset"),
+    ("trials", "part of the trial store"),
+    ("improve", "part of improve's rounds"),
+    ("reports", "a report that eval keeps for graspmap report"),
+];
+
+/// What the existing file at `path` is, when graspmap reads it as state: a file in one of the
+/// data directory's state folders, a model file beside the model, a checkpoint, or a JSON file
+/// whose schema or shape is that of one of graspmap's own state files (wherever it lies).
+pub(crate) fn state_of(path: &Path, data: Option<&Path>) -> Option<String> {
+    if !path.is_file() {
+        return None;
+    }
+    if let Some(data) = data {
+        let id = identity(path);
+        let data = identity(data);
+        for (folder, words) in STATE_FOLDERS {
+            if id.starts_with(data.join(folder)) {
+                return Some(format!("{words} in {}", data.join(folder).display()));
+            }
+        }
+        if id.parent() == Some(&data.join("affordance")) {
+            return Some(format!(
+                "part of the model in {}",
+                data.join("affordance").display()
+            ));
+        }
+    }
+    let extension = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    if extension.as_deref() == Some("safetensors") {
+        return Some("a model checkpoint".to_owned());
+    }
+    let json = json_of(path)?;
+    if let Some(schema) = json.get("schema").and_then(|s| s.as_str()) {
+        let command = schema
+            .strip_prefix("graspmap.")
+            .and_then(|s| s.split('/').next());
+        return match command {
+            Some(c) if !REPORTING_COMMANDS.contains(&c) => {
+                Some(format!("a graspmap state file (schema {schema})"))
+            }
+            _ => None,
+        };
+    }
+    state_shape(&json)
+}
+
+/// graspmap's state files without a schema, told by their shape: labels.json (every value a
+/// list of `[x, y, angle]`), a trial store's scene (`trials.json`) and improve's summaries.
+fn state_shape(json: &serde_json::Value) -> Option<String> {
+    let has = |v: &serde_json::Value, keys: &[&str]| keys.iter().all(|k| v.get(k).is_some());
+    let summary = |v: &serde_json::Value| has(v, &["round", "collected_with", "model"]);
+    if summary(json)
+        || json
+            .as_array()
+            .is_some_and(|a| !a.is_empty() && a.iter().all(summary))
+    {
+        return Some("a summary of improve's rounds".to_owned());
+    }
+    if has(json, &["scene", "drop_seed", "complete", "trials"]) {
+        return Some("a scene of a trial store".to_owned());
+    }
+    let is_label = |v: &serde_json::Value| {
+        v.as_array()
+            .is_some_and(|a| a.len() == 3 && a.iter().all(serde_json::Value::is_number))
+    };
+    let labels = json.as_object().is_some_and(|o| {
+        !o.is_empty()
+            && o.values()
+                .all(|v| v.as_array().is_some_and(|l| l.iter().all(is_label)))
+    });
+    labels.then(|| "a labels file (labels.json)".to_owned())
 }
 
 /// One file a command will write: its path, the flag that names it in errors, and what an
@@ -197,6 +315,8 @@ pub(crate) struct RunFiles {
     pub(crate) protected: Vec<(String, PathBuf)>,
     /// `--force`, where the command has it for its outputs (`None` where it does not).
     pub(crate) force: Option<bool>,
+    /// The data directory, whose state folders no output may replace a file in.
+    pub(crate) data: Option<PathBuf>,
 }
 
 impl RunFiles {
@@ -267,6 +387,22 @@ impl RunFiles {
                     path: path.clone(),
                 });
             }
+            // An earlier preview, video or page of the output's own kind is the command's own,
+            // wherever it lies (label --interactive's preview sits in the labels folder).
+            let own_kind = match output.existing {
+                Existing::Own(kind) | Existing::Earlier(kind) => {
+                    !matches!(kind, Kind::JsonReport(_)) && kind.holds(path)
+                }
+                _ => false,
+            };
+            let state = state_of(path, self.data.as_deref()).filter(|_| !own_kind);
+            if let Some(state) = state {
+                return Err(OutputError::IsState {
+                    what: what.clone(),
+                    path: path.clone(),
+                    state,
+                });
+            }
             if path.symlink_metadata().is_ok() {
                 let forced = self.force == Some(true);
                 let (allowed, why) = match output.existing {
@@ -276,15 +412,21 @@ impl RunFiles {
                         forced || kind.holds(path),
                         format!(" and is not an earlier {}", kind.name()),
                     ),
+                    Existing::Earlier(kind) => (
+                        kind.holds(path),
+                        format!(" and is not an earlier {}", kind.name()),
+                    ),
                 };
                 if !allowed {
                     return Err(OutputError::Exists {
                         what: what.clone(),
                         path: path.clone(),
                         why,
-                        fix: match self.force {
-                            Some(_) => "pass --force to replace it, or choose another path",
-                            None => "delete it, or choose another path",
+                        fix: match (self.force, output.existing) {
+                            (Some(_), Existing::Own(_) | Existing::Force) => {
+                                "pass --force to replace it, or choose another path"
+                            }
+                            _ => "delete it, or choose another path",
                         },
                     });
                 }
@@ -393,6 +535,71 @@ mod tests {
             .unwrap()
             .collect();
         assert!(left.is_empty());
+    }
+
+    #[test]
+    fn a_json_report_replaces_only_its_own_command_s_and_never_state() {
+        let dir = tempfile::tempdir().unwrap();
+        let write = |name: &str, text: &str| {
+            let path = dir.path().join(name);
+            std::fs::write(&path, text).unwrap();
+            path
+        };
+        let eval = write(
+            "eval.json",
+            r#"{"schema": "graspmap.eval/2", "results": {}}"#,
+        );
+        let progress = write("p.json", r#"{"schema": "graspmap.label-progress/2"}"#);
+        let evaluation = write("e.json", r#"{"schema": "graspmap.evaluation/1"}"#);
+        let labels = write("l.json", r#"{"YcbHammer": [[75, 64, 45.0]]}"#);
+        let scene = write(
+            "t.json",
+            r#"{"scene": 0, "drop_seed": 1, "objects": [], "complete": true, "trials": []}"#,
+        );
+        let summary = write(
+            "s.json",
+            r#"[{"round": 1, "collected_with": "a", "model": "b"}]"#,
+        );
+        let mine = write("mine.json", r#"{"a": 1}"#);
+        let weights = write("w.safetensors", "x");
+        assert!(Kind::JsonReport("eval").holds(&eval));
+        assert!(!Kind::JsonReport("train").holds(&eval));
+        // A longer command name sharing the prefix is another command.
+        assert!(!Kind::JsonReport("eval").holds(&evaluation));
+        for state in [&progress, &evaluation, &labels, &scene, &summary, &weights] {
+            assert!(state_of(state, None).is_some(), "{state:?}");
+        }
+        for other in [&eval, &mine] {
+            assert_eq!(state_of(other, None), None, "{other:?}");
+        }
+        // Inside a data directory's state folders, any file is state.
+        let data = dir.path().join("data");
+        std::fs::create_dir_all(data.join("labels")).unwrap();
+        let image = data.join("labels").join("notes.txt");
+        std::fs::write(&image, "x").unwrap();
+        assert_eq!(state_of(&image, None), None);
+        assert!(state_of(&image, Some(&data)).is_some());
+        // The labelling preview is label's own, in the labels folder.
+        let preview = data.join("labels").join("preview.png");
+        image::RgbImage::new(512, 512).save(&preview).unwrap();
+        let files = RunFiles {
+            outputs: vec![FileOutput::new(
+                &preview,
+                "--preview",
+                Existing::Own(Kind::Preview),
+            )],
+            data: Some(data.clone()),
+            ..RunFiles::default()
+        };
+        files.check().unwrap();
+        // Even with --force.
+        let files = RunFiles {
+            outputs: vec![FileOutput::new(&progress, "--out", Existing::Force)],
+            force: Some(true),
+            ..RunFiles::default()
+        };
+        let err = files.check().unwrap_err().to_string();
+        assert!(err.contains("which graspmap reads"), "{err}");
     }
 
     #[test]

@@ -311,7 +311,7 @@ pub(crate) struct EvalResults {
 /// The schema `eval` writes and its readers accept.
 pub(crate) const EVAL_SCHEMA: &str = "graspmap.eval/2";
 
-/// An eval report as `merge`, `eval --resume` and `improve` read it back: the envelope's
+/// An eval report as `merge`, `eval --resume`, `improve` and `report` read it back: the envelope's
 /// commit, the settings they compare, and the results, in the types `eval` writes them with.
 /// [`EvalReport::read`] fills nothing in: another schema, or a field missing or of another
 /// type, is an error that names the file.
@@ -351,13 +351,23 @@ pub(crate) struct EvalSettings {
     /// `I/N` for a shard of the sweep; absent for the whole sweep.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) shard: Option<String>,
+    /// empty_bin's most attempts per scene.
+    pub(crate) max_attempts: u32,
+    /// empty_bin's failures in a row that end a scene (0 = never).
+    pub(crate) give_up_after: u32,
+    /// The `--record` video, when one was asked for.
+    pub(crate) record: Option<PathBuf>,
 }
 
 /// The global flags of an eval report's `config` that its readers use.
 #[derive(Debug, Clone, PartialEq, Serialize, serde::Deserialize)]
 pub(crate) struct GlobalSettings {
+    /// The data directory it ran with.
+    pub(crate) data: PathBuf,
     /// Where the object models came from.
     pub(crate) objects_dir: PathBuf,
+    /// The split file it read.
+    pub(crate) split_path: PathBuf,
 }
 
 /// Failure suppression in an eval report's `config`, as far as its readers use it.
@@ -859,12 +869,20 @@ mod tests {
             false,
         );
         let config = serde_json::json!({
-            "global": {"objects_dir": "bundled:objects", "threads": 1},
+            "global": {
+                "data": "data",
+                "objects_dir": "bundled:objects",
+                "split_path": "bundled:objects/split.json",
+                "threads": 1,
+            },
             "task": "empty_bin",
             "policy": "random",
             "seeds": [2],
             "objects": names,
             "suppression": {"remember": 0, "sigma_px": 4.0},
+            "max_attempts": 25,
+            "give_up_after": 0,
+            "record": null,
         });
         let path = dir.join("eval.json");
         crate::present::envelope::write_versioned_report(&path, "eval", 2, 2, &config, &results)

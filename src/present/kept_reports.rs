@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::assets::BUNDLED_PREFIX;
-use crate::named::{counted, Named};
+use crate::named::{counted, shell_word, Named};
 use crate::policy::PolicyKind;
 use crate::present::eval_report::Task;
 
@@ -160,10 +160,10 @@ impl Comparable {
             flags += &format!(" --give-up-after {k}");
         }
         if !self.objects_dir.starts_with(BUNDLED_PREFIX) {
-            flags += &format!(" --objects-dir {}", self.objects_dir);
+            flags += &format!(" --objects-dir {}", shell_word(&self.objects_dir));
         }
         if !self.split.starts_with(BUNDLED_PREFIX) {
-            flags += &format!(" --split {}", self.split);
+            flags += &format!(" --split {}", shell_word(&self.split));
         }
         flags
     }

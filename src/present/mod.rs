@@ -4,6 +4,7 @@
 
 pub(crate) mod envelope;
 pub(crate) mod eval_report;
+pub(crate) mod improve_summary;
 pub(crate) mod kept_reports;
 pub(crate) mod report_page;
 pub(crate) mod video;

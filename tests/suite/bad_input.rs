@@ -327,6 +327,42 @@ const CASES: &[Case] = &[
         2,
         "is not an earlier graspmap report",
     ),
+    // --json replaces only an earlier report of the same command, and nothing that graspmap
+    // reads as state: not with --force, not outside the data directory.
+    case(
+        "--data {data} --json {tmp}/train_report.json eval --task test --policy random",
+        2,
+        "is not an earlier graspmap eval report",
+    )
+    .without("--force"),
+    case(
+        "--data {data} --json {data}/labels/labels.json eval --task test --policy random",
+        2,
+        "part of the labelled dataset",
+    )
+    .how(How::Keeps("labels/labels.json")),
+    case(
+        "--data {data} --json {data}/affordance/best.json eval --task test --policy random",
+        2,
+        "part of the model",
+    )
+    .how(How::Keeps("affordance/best.json")),
+    case(
+        "--data {data} --json {tmp}/trials/collect.json predict --image {tmp}/photo.png --force",
+        2,
+        "(schema graspmap.trials/1), which graspmap reads",
+    ),
+    case(
+        "--data {data} predict --image {tmp}/photo.png --out {data}/labels/YcbHammer_1_rgb.png --force",
+        2,
+        "which graspmap reads",
+    )
+    .how(How::Keeps("labels/YcbHammer_1_rgb.png")),
+    case(
+        "--data {tmp}/user_page report",
+        2,
+        "is not an earlier graspmap report page",
+    ),
     case(
         "--data {fresh} label --clicks {tmp}/clicks_test.json --json {tmp}/clicks_test.json",
         2,
@@ -496,6 +532,46 @@ const CASES: &[Case] = &[
         2,
         "--seed",
     ),
+    // Inputs that are not files or folders, seeds whose derived seeds would wrap, and global
+    // flags a command never reads.
+    case("merge --out {tmp}/m3.json /dev/null", 2, "/dev/null").without("panicked"),
+    case(
+        "--data {data} eval --task test --policy random --seeds 18446744073709551615",
+        2,
+        "give a seed of at most",
+    ),
+    case(
+        "--data {tmp}/huge_seed label --seed 18446744073709551615",
+        2,
+        "give a seed of at most",
+    ),
+    case(
+        "--data {data} improve --seed 18446744073709551615",
+        2,
+        "give a seed of at most",
+    ),
+    case(
+        "--data {data} scene --objects YcbPear --out {tmp}/s_data.png",
+        2,
+        "--data is not used by `graspmap scene`",
+    ),
+    case(
+        "grasp --data {data} --object YcbPear --oracle",
+        2,
+        "--data is not used by `graspmap grasp`",
+    ),
+    case(
+        "--threads 2 scene --objects YcbPear --out {tmp}/s_threads.png",
+        2,
+        "--threads is not used",
+    ),
+    // --quiet: the results, not the scene's progress.
+    case(
+        "--data {data} --quiet eval --task empty_bin --policy oracle --max-attempts 1",
+        0,
+        "objects moved: ",
+    )
+    .without("/15 objects moved"),
     // The smaller slips.
     case("--data {data} train --epochs -1", 2, "--epochs"),
     case(
@@ -737,6 +813,12 @@ impl Workspace {
         write("taken.json", "{}");
         write("notes.txt", "my notes");
         write("mine.html", "<p>my page</p>");
+        std::fs::create_dir_all(ws.path("user_page")).unwrap();
+        write("user_page/report.html", "<p>my page</p>");
+        write(
+            "train_report.json",
+            r#"{"schema": "graspmap.train/1", "results": {}}"#,
+        );
         write("shard_a.json", "{}");
         write("shard_b.json", "{}");
         std::fs::create_dir_all(ws.path("empty")).unwrap();

@@ -464,6 +464,29 @@ fn eval_shards_merge_into_the_unsharded_report_and_bad_merges_are_refused() {
 #[test]
 fn improve_collects_with_each_round_s_model_and_a_rerun_continues_without_redoing() {
     let setup = Setup::new();
+    let split = setup.path("split.json");
+    let improve_with = |extra: &[&str]| {
+        let mut args = vec![
+            "--data",
+            setup.dir.path().to_str().unwrap(),
+            "--split",
+            split.to_str().unwrap(),
+            "--quiet",
+            "improve",
+        ];
+        args.extend_from_slice(extra);
+        args.extend_from_slice(&[
+            "--scenes",
+            "1",
+            "--epochs",
+            "1",
+            "--clutter",
+            "2",
+            "--max-attempts",
+            "2",
+        ]);
+        graspmap(&args)
+    };
     let improve = || {
         graspmap(&[
             "--data",
@@ -484,7 +507,18 @@ fn improve_collects_with_each_round_s_model_and_a_rerun_continues_without_redoin
             "2",
         ])
     };
-    assert_ok(&improve());
+    let out = improve();
+    assert_ok(&out);
+    // Its last line's command evaluates the new model as printed.
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let hint = stdout
+        .lines()
+        .find_map(|l| l.split_once("evaluate it with ").map(|(_, c)| c.to_owned()))
+        .unwrap_or_else(|| panic!("no command to evaluate with: {stdout}"));
+    let words = crate::common::shell_words(&hint);
+    assert_eq!(words[0], "graspmap", "{hint}");
+    let words: Vec<&str> = words[1..].iter().map(String::as_str).collect();
+    assert_ok(&graspmap(&words));
     let summary = read_json(&setup.path("improve/summary.json"));
     let rounds = summary.as_array().unwrap();
     assert_eq!(rounds.len(), 2);
@@ -518,4 +552,23 @@ fn improve_collects_with_each_round_s_model_and_a_rerun_continues_without_redoin
             .collect()
     };
     assert_eq!(models(&before), models(&after));
+    // Rounds written elsewhere with --out are on the report's page too.
+    let elsewhere = setup.path("elsewhere");
+    assert_ok(&improve_with(&[
+        "--rounds",
+        "1",
+        "--out",
+        elsewhere.to_str().unwrap(),
+    ]));
+    assert_ok(&graspmap(&[
+        "--data",
+        setup.dir.path().to_str().unwrap(),
+        "report",
+    ]));
+    let page = std::fs::read_to_string(setup.path("report.html")).unwrap();
+    assert!(
+        page.contains(&format!("Rounds in {}", elsewhere.display())),
+        "the --out rounds are missing from the page"
+    );
+    assert!(page.contains(&format!("improve {} round 1", elsewhere.display())));
 }

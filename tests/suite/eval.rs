@@ -37,7 +37,11 @@ impl Setup {
     pub(crate) fn run(&self, args: &[&str]) -> std::process::Output {
         let data = self.dir.path().to_str().unwrap().to_owned();
         let split = self.path("split.json").to_str().unwrap().to_owned();
-        let mut all = vec!["--data", &data, "--threads", "2"];
+        // scene and grasp neither read a data directory nor use threads, and refuse both.
+        let mut all = match args.first() {
+            Some(&"scene" | &"grasp") => Vec::new(),
+            _ => vec!["--data", &data, "--threads", "2"],
+        };
         if args.iter().any(|a| *a == "eval" || *a == "label") {
             all.extend(["--split", split.as_str()]);
         }
@@ -302,16 +306,20 @@ fn empty_bin_counts_moved_left_and_lost_every_attempt() {
     let out = setup.oracle_empty_bin(2, &["--json", json.to_str().unwrap()]);
     assert_ok(&out);
     let stdout = String::from_utf8_lossy(&out.stdout);
-    let progress: Vec<&str> = stdout
+    // The scene's progress goes to stderr; stdout carries the results.
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    let progress: Vec<&str> = stderr
         .lines()
         .filter(|l| l.ends_with("objects moved"))
         .collect();
-    assert!(!progress.is_empty() && progress.len() <= 2, "{stdout}");
+    assert!(!progress.is_empty() && progress.len() <= 2, "{stderr}");
     assert!(
         progress.iter().all(|l| l.contains("/2 objects moved")),
-        "{stdout}"
+        "{stderr}"
     );
-    assert!(stdout.contains("objects left in the bin."), "{stdout}");
+    assert!(stderr.contains("objects left in the bin."), "{stderr}");
+    assert!(!stdout.contains("objects moved\n"), "{stdout}");
+    assert!(stdout.contains("left  lost"), "the results table: {stdout}");
     let report = read_json(&json);
     assert_eq!(report["config"]["seeds"], serde_json::json!([2]));
     let bin = &report["results"]["runs"][0]["bin"];
@@ -442,10 +450,10 @@ fn give_up_after_ends_a_scene_on_its_first_run_of_failures() {
         gave_up > 0,
         "the random policy fails twice in a row somewhere"
     );
-    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
     assert!(
-        stdout.contains("gave up after 2 failed attempts in a row."),
-        "{stdout}"
+        stderr.contains("gave up after 2 failed attempts in a row."),
+        "{stderr}"
     );
 }
 
@@ -642,12 +650,13 @@ fn ctrl_c_keeps_the_finished_scenes_and_resume_equals_an_uninterrupted_sweep() {
     let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_graspmap"))
         .args(sweep(&report))
         .env_remove("GRASPMAP_LOG")
-        .stdout(std::process::Stdio::piped())
-        .stderr(std::process::Stdio::null())
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
         .spawn()
         .unwrap();
-    // The first scene is done when it says how many objects it left.
-    let mut lines = std::io::BufReader::new(child.stdout.take().unwrap()).lines();
+    // The first scene is done when it says (on stderr, with what the run kept) how many
+    // objects it left.
+    let mut lines = std::io::BufReader::new(child.stderr.take().unwrap()).lines();
     for line in lines.by_ref() {
         if line.unwrap().ends_with("objects left in the bin.") {
             break;

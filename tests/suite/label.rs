@@ -104,6 +104,42 @@ fn the_reference_fixture_loads_and_round_trips() {
 }
 
 #[test]
+fn no_json_report_replaces_the_labelling_state() {
+    let ws = Workspace::new();
+    assert_ok(&ws.run(&["--per-object", "1"]));
+    let before = ws.snapshot();
+    for file in ["progress.json", "labels.json"] {
+        let target = ws.labels().join(file);
+        let out = Command::new(BIN)
+            .arg("--data")
+            .arg(ws.data())
+            .arg("--json")
+            .arg(&target)
+            .args(["eval", "--task", "test", "--policy", "random"])
+            .output()
+            .unwrap();
+        assert_user_error(&out, file);
+        // The same file outside the data directory is still recognised as state.
+        let copy = ws.dir.path().join(file);
+        std::fs::copy(&target, &copy).unwrap();
+        let out = Command::new(BIN)
+            .arg("--json")
+            .arg(&copy)
+            .args(["scene", "--objects", "YcbPear", "--force", "--out"])
+            .arg(ws.dir.path().join("scene.png"))
+            .output()
+            .unwrap();
+        assert_user_error(&out, "which graspmap reads");
+        assert_eq!(
+            std::fs::read(&copy).unwrap(),
+            std::fs::read(&target).unwrap()
+        );
+    }
+    assert_eq!(ws.snapshot(), before);
+    assert_ok(&ws.run(&["--check"]));
+}
+
+#[test]
 fn the_same_seed_gives_byte_identical_datasets_whatever_the_thread_count() {
     let a = Workspace::new();
     let b = Workspace::new();
@@ -186,6 +222,42 @@ fn resuming_asks_for_the_same_settings() {
     assert_user_error(&ws.run(&["--per-object", "2", "--seed", "3"]), "--seed 0");
     // --force starts over with the new settings.
     assert_ok(&ws.run(&["--per-object", "1", "--seed", "3", "--force"]));
+}
+
+#[test]
+fn warnings_carry_no_colour_codes_when_stderr_is_not_a_terminal() {
+    let ws = Workspace::new();
+    let labels = ws.labels();
+    std::fs::create_dir_all(&labels).unwrap();
+    for entry in std::fs::read_dir(fixture()).unwrap().flatten() {
+        std::fs::copy(entry.path(), labels.join(entry.file_name())).unwrap();
+    }
+    let split = ws.dir.path().join("fixture_split.json");
+    std::fs::write(
+        &split,
+        r#"{"train": ["YcbHammer", "YcbTomatoSoupCan"], "test": []}"#,
+    )
+    .unwrap();
+    // The fixture has its 2 labels per object and no progress file: a warning, no work.
+    let out = Command::new(BIN)
+        .arg("--data")
+        .arg(ws.data())
+        .arg("--split")
+        .arg(&split)
+        .args(["label", "--per-object", "2"])
+        .env_remove("GRASPMAP_LOG")
+        .output()
+        .unwrap();
+    assert_ok(&out);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stderr.contains("WARN") && stderr.contains("no progress file"),
+        "{stderr}"
+    );
+    assert!(
+        !stderr.contains('\x1b'),
+        "colour codes in a file: {stderr:?}"
+    );
 }
 
 #[test]
@@ -413,16 +485,20 @@ fn ctrl_c_stops_after_the_current_round_and_the_rerun_finishes_the_same_dataset(
     wait_for(&ws.labels().join("labels.json"));
     crate::common::send_signal(&child, libc::SIGINT);
     let out = child.wait_with_output().unwrap();
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert_eq!(out.status.code(), Some(130), "stdout: {stdout}");
-    assert!(stdout.contains("interrupted by SIGINT"), "{stdout}");
-    assert!(stdout.contains("rerun the same command"), "{stdout}");
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(130), "stderr: {stderr}");
+    assert!(stderr.contains("interrupted by SIGINT"), "{stderr}");
+    assert!(stderr.contains("rerun the same command"), "{stderr}");
     assert_ok(&ws.run(&["--check"]));
     assert_ok(&ws.run(&["--per-object", "3"]));
     assert_eq!(ws.snapshot(), reference.snapshot());
 }
 
 #[test]
+#[cfg_attr(
+    not(feature = "fault-injection"),
+    ignore = "injects faults: needs --features fault-injection, which ./test.sh turns on"
+)]
 fn a_full_disk_at_any_write_of_a_round_fails_clearly_and_the_rerun_resumes() {
     let reference = Workspace::new();
     assert_ok(&reference.run(&["--per-object", "1", "--threads", "1"]));

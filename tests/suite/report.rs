@@ -140,9 +140,14 @@ fn the_report_of_a_small_run_links_only_files_it_wrote_and_names_every_eval() {
     assert!(html.contains("<video controls") && html.contains("episode.mp4"));
     assert!(html.contains("4 labels of 2 objects"), "label summary");
     assert!(html.contains("Trained 1 epoch."), "training summary");
-    // What is missing is named with the command that makes it.
-    assert!(html.contains("No test evaluation yet: run <code>graspmap eval --task test</code>"));
-    assert!(html.contains("graspmap eval --task train --policy oracle"));
+    // What is missing is named with the command that makes it, naming the data directory.
+    let data = setup.dir.path().display();
+    assert!(html.contains(&format!(
+        "No test evaluation yet: run <code>graspmap --data {data} eval --task test</code>"
+    )));
+    assert!(html.contains(&format!(
+        "graspmap --data {data} eval --task train --policy oracle"
+    )));
     assert!(
         !html.contains("<script") && !html.contains("http"),
         "not self-contained"
@@ -181,13 +186,72 @@ fn the_report_of_a_small_run_links_only_files_it_wrote_and_names_every_eval() {
         "the probe's settings are named"
     );
     assert!(html.contains("listed apart, not compared"));
-    assert!(html.contains("graspmap eval --task train --policy model --seeds 7"));
+    assert!(html.contains(&format!(
+        "graspmap --data {data} eval --task train --policy model --seeds 7"
+    )));
     let dir = setup.path("pages.html");
     std::fs::create_dir_all(&dir).unwrap();
     assert_user_error(
         &setup.run(&["report", "--out", dir.to_str().unwrap()]),
         &["pages.html", "is a directory"],
     );
+    // Last, as they add runs: every command the page suggests runs as printed.
+    assert_ok(&setup.run(&["report"]));
+    let html = std::fs::read_to_string(&page).unwrap();
+    runs_as_printed(&suggested_commands(&html));
+}
+
+/// Every `<code>graspmap …</code>` of a page, unescaped, each once.
+fn suggested_commands(html: &str) -> Vec<String> {
+    let mut found: Vec<String> = Vec::new();
+    for part in html.split("<code>").skip(1) {
+        let code = part.split("</code>").next().unwrap();
+        let text = code
+            .replace("&lt;", "<")
+            .replace("&gt;", ">")
+            .replace("&quot;", "\"")
+            .replace("&#39;", "'")
+            .replace("&amp;", "&");
+        if text.starts_with("graspmap ") && !found.contains(&text) {
+            found.push(text);
+        }
+    }
+    found
+}
+
+/// Runs each command as printed. A command that ends within a few seconds must succeed; one
+/// still working then is past every check of its flags, files and seeds (those take well
+/// under a second), and is stopped with Ctrl-C, which it must take as an interruption.
+fn runs_as_printed(commands: &[String]) {
+    assert!(commands.len() >= 5, "{commands:?}");
+    for command in commands {
+        let words = crate::common::shell_words(command);
+        assert_eq!(words[0], "graspmap", "{command}");
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_graspmap"))
+            .args(&words[1..])
+            .env_remove("GRASPMAP_LOG")
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let start = std::time::Instant::now();
+        while child.try_wait().unwrap().is_none() && start.elapsed().as_secs() < 5 {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        let stopped = child.try_wait().unwrap().is_none();
+        if stopped {
+            crate::common::send_signal(&child, libc::SIGINT);
+        }
+        let out = child.wait_with_output().unwrap();
+        // Stopped just as it finished, it ends with 0.
+        let fine: &[i32] = if stopped { &[130, 0] } else { &[0] };
+        assert!(
+            out.status.code().is_some_and(|c| fine.contains(&c)),
+            "`{command}` ended with {:?}: {}",
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
 }
 
 /// The pictures' left panel, the best of the 8 angles at twice the camera's 128 px, below the

@@ -4,6 +4,7 @@
 use std::path::PathBuf;
 
 use crate::commands::RunBy;
+use crate::data::seeds::{derived_seed, SeedOverflow};
 use crate::data::shard::Shard;
 use crate::model::unet::Precision;
 use crate::policy::model::ModelPolicyConfig;
@@ -15,6 +16,18 @@ use crate::present::eval_report::Task;
 pub(crate) const ATTEMPTS_PER_OBJECT: u32 = 3;
 /// Offset of the train/test drop seeds (the reference's): seed + 100·i + a + 10000.
 pub(crate) const SINGLE_OBJECT_SEED_OFFSET: u64 = 10_000;
+
+/// The drop seed of train/test attempt `a` of object `i` under base seed `seed`.
+pub(crate) fn single_object_seed(seed: u64, i: usize, a: u32) -> Result<u64, SeedOverflow> {
+    let offset = 100 * i as u64 + u64::from(a) + SINGLE_OBJECT_SEED_OFFSET;
+    derived_seed(
+        seed,
+        1,
+        offset,
+        "seed + 100·i + a + 10000 for attempt a of object i",
+    )
+}
+
 /// Physics steps between episode video frames: 10 fps, so that a 25-attempt episode stays small
 /// (its MP4 and GIF sizes: BENCHMARKS.md#videos-and-the-report); `grasp --record` films one
 /// attempt at 24 fps.

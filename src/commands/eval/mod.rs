@@ -30,8 +30,8 @@ use crate::present::eval_report::{report_lines, summarise, AttemptRecord, SceneR
 use crate::present::video::save_video_atomic;
 use crate::sim::WorkcellConfig;
 pub(crate) use config::{
-    give_up_by_default, pushes_by_default, EvalConfig, ATTEMPTS_PER_OBJECT, EPISODE_EVERY_STEPS,
-    SINGLE_OBJECT_SEED_OFFSET,
+    give_up_by_default, pushes_by_default, single_object_seed, EvalConfig, ATTEMPTS_PER_OBJECT,
+    EPISODE_EVERY_STEPS,
 };
 use scene::Setup;
 use sweep::{
@@ -216,6 +216,13 @@ fn plan(context: &Context, config: &EvalConfig) -> anyhow::Result<Plan> {
         Task::Scenes => Vec::new(),
         _ => context.objects.load_all(&names)?,
     };
+    if matches!(config.task, Task::Train | Task::Test) {
+        // The last attempt of the last object has the largest seed: when it fits, all do.
+        let last = models.len().saturating_sub(1);
+        for &seed in &config.seeds {
+            single_object_seed(seed, last, ATTEMPTS_PER_OBJECT - 1)?;
+        }
+    }
     let vis_dir = context.data.join("affordance").join(match config.task {
         Task::Train => "eval_pick_training_vis",
         Task::Test => "eval_pick_testing_vis",
@@ -258,7 +265,7 @@ fn resumed(
     let kept = kept_path(context, config, names);
     let source = resume_source(context, &kept);
     let runs = finished_runs(source, config)?;
-    context.say(&format!(
+    context.note(&format!(
         "resuming: {} of {} already in {}",
         runs.len(),
         counted(scenes, "scene"),
@@ -392,7 +399,7 @@ impl Evaluation<'_> {
             |finished| match finished {
                 Finished::Scene(run, lines) => {
                     for line in &lines {
-                        self.bar.suspend(|| self.context.say(line));
+                        self.bar.suspend(|| self.context.note(line));
                     }
                     runs.push(run);
                 }

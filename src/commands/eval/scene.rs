@@ -7,7 +7,7 @@ use std::time::Instant;
 
 use image::RgbImage;
 
-use super::{Evaluation, Worker, EPISODE_EVERY_STEPS, SINGLE_OBJECT_SEED_OFFSET};
+use super::{single_object_seed, Evaluation, Worker, EPISODE_EVERY_STEPS};
 use crate::assets::objects::ObjectModel;
 use crate::commands::arranged::ArrangedScene;
 use crate::commands::attempt::{objects_in_bin, Look};
@@ -35,7 +35,7 @@ impl Evaluation<'_> {
         a: u32,
     ) -> anyhow::Result<AttemptRecord> {
         let started = Instant::now();
-        let drop_seed = seed + 100 * i as u64 + u64::from(a) + SINGLE_OBJECT_SEED_OFFSET;
+        let drop_seed = single_object_seed(seed, i, a)?;
         let mut cell = self.workcell()?;
         cell.drop_objects(std::slice::from_ref(model), drop_seed)?;
         let drop_seconds = started.elapsed().as_secs_f64();
@@ -87,7 +87,7 @@ impl Evaluation<'_> {
         let mut gave_up = false;
         let mut lines = Vec::new();
         let mut say = |line: String| match self.live_lines {
-            true => self.bar.suspend(|| self.context.say(&line)),
+            true => self.bar.suspend(|| self.context.note(&line)),
             false => lines.push(line),
         };
         for a in 0..self.max_attempts {

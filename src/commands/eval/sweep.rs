@@ -69,7 +69,7 @@ pub(super) fn keep_interrupted(
             write_versioned_report(target, "eval", 2, config.seeds[0], &resolved, &results)?;
         }
         let place = own.unwrap_or(&kept_path);
-        context.say(&format!(
+        context.stopped(&format!(
             "{interrupted}: {kept} kept in {}; {}",
             place.display(),
             match config.run_by {

@@ -40,7 +40,7 @@ pub(super) fn backfill_depth(context: &Context, store: &LabelStore) -> anyhow::R
             if k > n {
                 break;
             }
-            let seed = round_seed(progress.seed, j, round);
+            let seed = round_seed(progress.seed, j, round)?;
             let (cell, _) = round_scene(&models, j, progress.clutter, seed)?;
             let frame = cell.capture();
             let image_path = store.image_path(object, k);
@@ -63,7 +63,7 @@ pub(super) fn backfill_depth(context: &Context, store: &LabelStore) -> anyhow::R
                  depth cannot be backfilled (was it labelled with another version of graspmap's \
                  physics?); relabel with `graspmap label --force`",
                 store.image_path(object, k).display(),
-                round_seed(progress.seed, j, 0),
+                round_seed(progress.seed, j, 0)?,
                 progress.clutter
             );
         }

@@ -11,7 +11,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Mutex;
 use std::time::Instant;
 
-use anyhow::bail;
+use anyhow::{bail, Context as _};
 
 use super::Context;
 use crate::assets::objects::ObjectModel;
@@ -82,6 +82,9 @@ pub(crate) fn run(context: &Context, args: LabelConfig) -> anyhow::Result<()> {
 fn label(context: &Context, args: &LabelConfig, store: &LabelStore) -> anyhow::Result<()> {
     let split = context.split()?;
     check_clutter(args.clutter, &split.train)?;
+    // The last round's seed is the largest: when it fits, every round's does.
+    let last = split.train.len().saturating_sub(1);
+    rounds::round_seed(args.seed, last, args.max_rounds - 1).context("--seed")?;
     let models = context.objects.load_all(&split.train)?;
     let clicker = clicker(args, &split.train, &split.test)?;
     if let Clicker::Web { server, .. } = &clicker {
@@ -177,7 +180,7 @@ fn stopped(
         ));
         return Ok(());
     }
-    context.say(&format!(
+    context.stopped(&format!(
         "{interrupted}: {} kept in {}, each verified and saved; rerun the same command to continue",
         counted(kept, "label"),
         store.dir().display()
@@ -376,7 +379,7 @@ impl ObjectJob<'_> {
                     args.max_rounds
                 );
             }
-            let round_seed = rounds::round_seed(args.seed, j, round);
+            let round_seed = rounds::round_seed(args.seed, j, round)?;
             self.bar
                 .set_message(format!("{object} {have}/{} round {round}", args.per_object));
             let (mut cell, id) = rounds::round_scene(models, j, args.clutter, round_seed)?;

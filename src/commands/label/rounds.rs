@@ -3,11 +3,18 @@
 
 use crate::assets::objects::ObjectModel;
 use crate::data::clutter::{round_object_id, round_objects};
+use crate::data::seeds::{derived_seed, SeedOverflow};
 use crate::sim::{Workcell, WorkcellConfig};
 
 /// The seed of round `round` of training object `j`: base + 100·j + r (docs/data.md).
-pub(super) fn round_seed(base: u64, j: usize, round: u32) -> u64 {
-    base + 100 * j as u64 + u64::from(round)
+pub(super) fn round_seed(base: u64, j: usize, round: u32) -> Result<u64, SeedOverflow> {
+    let offset = 100 * j as u64 + u64::from(round);
+    derived_seed(
+        base,
+        1,
+        offset,
+        "seed + 100·j + r for round r of training object j",
+    )
 }
 
 /// A workcell with round `seed`'s objects dropped into bin 1 (object `j` of `models` and, with

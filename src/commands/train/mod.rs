@@ -95,7 +95,7 @@ pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()
     let resume = resume_or_refuse(context, &options, &out_dir, images.len(), &trained_on)?;
     let mut run = start(&options, &out_dir, images.len(), resume, trained_on)?;
     if run.meta.epoch >= config.epochs {
-        context.say(&format!(
+        context.note(&format!(
             "already trained {} (--epochs {}); nothing to do",
             counted(run.meta.epoch as usize, "epoch"),
             config.epochs
@@ -181,7 +181,7 @@ impl Run {
             let Some(improved) = self.epoch(images, config, augment, out_dir, &bar)? else {
                 bar.finish_and_clear();
                 let interrupted = interrupt::requested().unwrap_or(Interrupted { signal: 2 });
-                context.say(&format!(
+                context.stopped(&format!(
                     "{interrupted}: epoch {} was abandoned; {} holds epoch {} complete; {}",
                     self.meta.epoch + 1,
                     out_dir.join("last.safetensors").display(),
@@ -322,7 +322,7 @@ fn resume_or_refuse(
     let why = match read_checkpoint(out_dir, "last") {
         Ok((_, meta)) => match resumable(&meta, &options.config, n_images, trained_on) {
             Ok(()) => {
-                context.say(&format!(
+                context.note(&format!(
                     "resuming {} at epoch {} (same settings and labels; --force trains anew)",
                     last.display(),
                     meta.epoch

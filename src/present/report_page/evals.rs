@@ -29,8 +29,8 @@ pub(crate) fn evals_section(
     let mut html = String::new();
     if entries.is_empty() {
         html.push_str(&missing(
-            "No evaluation yet",
-            "graspmap eval --task train (then --task test, --task empty_bin, and --policy random or oracle for the baselines)",
+            "No evaluation yet (then --task test and --task empty_bin, and the baselines with --policy random and --policy oracle)",
+            &files.command("eval --task train"),
         ));
         return Ok(html);
     }
@@ -42,7 +42,7 @@ pub(crate) fn evals_section(
         if groups.is_empty() {
             html.push_str(&missing(
                 &format!("No {} evaluation yet", task.name()),
-                &format!("graspmap eval --task {}", task.name()),
+                &files.command(&format!("eval --task {}", task.name())),
             ));
             continue;
         }
@@ -159,10 +159,10 @@ fn comparison(task: Task, entries: &[&Entry], files: &mut Files) -> anyhow::Resu
     for policy in absent.into_iter().filter(|_| hints) {
         html.push_str(&missing(
             &format!("No {policy} run of {}{with} yet", task.name()),
-            &format!(
-                "graspmap eval --task {} --policy {policy}{flags}",
+            &files.command(&format!(
+                "eval --task {} --policy {policy}{flags}",
                 task.name()
-            ),
+            )),
         ));
     }
     Ok(html)
@@ -283,11 +283,12 @@ pub(super) fn video(entry: &Entry, files: &mut Files) -> anyhow::Result<String> 
             if entry.task == Task::EmptyBin && entry.settings.seeds.len() == 1 {
                 missing(
                     "No episode video of this run",
-                    &format!(
-                        "graspmap eval --task empty_bin --policy {}{} --record episode.mp4",
+                    &files.command(&format!(
+                        "eval --task empty_bin --policy {}{} --record {}",
                         entry.policy.name(),
-                        entry.settings.eval_flags()
-                    ),
+                        entry.settings.eval_flags(),
+                        files.video_path(&format!("empty_bin_{}.mp4", entry.policy.name()))
+                    )),
                 )
             } else {
                 String::new()

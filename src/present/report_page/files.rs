@@ -22,11 +22,13 @@ pub(crate) struct Files {
     dir: PathBuf,
     /// The folder's name as the page links it.
     link_root: String,
+    /// The run's data directory, which the page's commands name.
+    data: PathBuf,
     written: Vec<PathBuf>,
 }
 
 impl Files {
-    pub(crate) fn new(out_html: &Path) -> Self {
+    pub(crate) fn new(out_html: &Path, data: &Path) -> Self {
         let dir = files_dir(out_html);
         let link_root = dir
             .file_name()
@@ -35,8 +37,21 @@ impl Files {
             html: out_html.to_path_buf(),
             dir,
             link_root,
+            data: data.to_path_buf(),
             written: Vec::new(),
         }
+    }
+
+    /// A command for the page to suggest, naming the run's data directory (html::command).
+    pub(crate) fn command(&self, rest: &str) -> String {
+        super::html::command(&self.data, rest)
+    }
+
+    /// Where a suggested `--record` writes its video: `DATA/demo/<name>`, as `./demo.sh` does,
+    /// as one shell word.
+    pub(crate) fn video_path(&self, name: &str) -> String {
+        let path = self.data.join("demo").join(name);
+        crate::named::shell_word(&path.display().to_string())
     }
 
     /// The relative URL of `name` (a `/`-separated path inside the folder), percent-encoded.
@@ -124,7 +139,7 @@ mod tests {
         std::fs::write(dir.path().join("run 1_files/old/stale.png"), b"x").unwrap();
         let source = dir.path().join("a.txt");
         std::fs::write(&source, b"hello").unwrap();
-        let mut files = Files::new(&html);
+        let mut files = Files::new(&html, dir.path());
         assert_eq!(
             files.copy(&source, "sub/a b.txt").unwrap(),
             "run%201_files/sub/a%20b.txt"

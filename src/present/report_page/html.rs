@@ -16,6 +16,13 @@ pub(crate) fn esc(text: &str) -> String {
     out
 }
 
+/// A command the page suggests, spelled to run as printed from anywhere: `graspmap --data
+/// DATA <rest>`, the run's data directory quoted for the shell.
+pub(crate) fn command(data: &std::path::Path, rest: &str) -> String {
+    let data = crate::named::shell_word(&data.display().to_string());
+    format!("graspmap --data {data} {rest}")
+}
+
 /// A line saying what is missing and which command makes it.
 pub(crate) fn missing(what: &str, command: &str) -> String {
     format!(

@@ -9,18 +9,42 @@ use super::evals::details;
 use super::files::Files;
 use super::html::esc;
 use super::kept::{read_kept, Entry};
+use crate::named::shell_word;
+use crate::present::improve_summary;
 
 /// One round's folder and the evaluations kept in it.
 pub(crate) struct Round {
-    /// 1, 2, … as `round_01`, `round_02`, … name them.
-    pub(crate) number: u32,
+    /// How the page names the round: "improve round 2", or with the folder of an `improve
+    /// --out` run, "improve runs/a round 2".
+    pub(crate) name: String,
+    /// The folder of its run, which holds the rounds' `summary.json`.
+    pub(crate) run: PathBuf,
     /// The evaluations of the round's model.
     pub(crate) entries: Vec<Entry>,
+    /// Its folder, `round_RR/`.
+    pub(crate) dir: PathBuf,
 }
 
-/// Every `round_RR/` under `DATA/improve`, in round order, with its kept evaluations.
+/// Every `round_RR/` of every improve run of the data directory (`DATA/improve`, then each
+/// `--out` that improve recorded), in round order, with its kept evaluations.
 pub(crate) fn read_rounds(data_dir: &Path) -> anyhow::Result<Vec<Round>> {
-    let Ok(listing) = std::fs::read_dir(data_dir.join("improve")) else {
+    let mut rounds = Vec::new();
+    for (i, run) in improve_summary::run_folders(data_dir)?
+        .into_iter()
+        .enumerate()
+    {
+        let (name, prefix) = match i {
+            0 => ("improve".to_owned(), "improve_".to_owned()),
+            i => (format!("improve {}", run.display()), format!("improve{i}_")),
+        };
+        rounds.extend(read_run(&run, &name, &prefix)?);
+    }
+    Ok(rounds)
+}
+
+/// The rounds of one improve run in `run`.
+fn read_run(run: &Path, name: &str, prefix: &str) -> anyhow::Result<Vec<Round>> {
+    let Ok(listing) = std::fs::read_dir(run) else {
         return Ok(Vec::new());
     };
     let mut found: Vec<(u32, PathBuf)> = listing
@@ -35,28 +59,45 @@ pub(crate) fn read_rounds(data_dir: &Path) -> anyhow::Result<Vec<Round>> {
     found
         .into_iter()
         .map(|(number, dir)| {
-            let entries = read_kept(&dir, &format!("improve_round_{number:02}_"))?;
-            Ok(Round { number, entries })
+            let entries = read_kept(&dir, &format!("{prefix}round_{number:02}_"))?;
+            Ok(Round {
+                name: format!("{name} round {number}"),
+                run: run.to_path_buf(),
+                entries,
+                dir,
+            })
         })
         .collect()
 }
 
 /// The folded section: the rounds' figures and each round's evaluations in full. Empty when
 /// there is no round.
-pub(crate) fn improve_section(
-    data_dir: &Path,
-    rounds: &[Round],
-    files: &mut Files,
-) -> anyhow::Result<String> {
-    if rounds.is_empty() {
-        return Ok(String::new());
-    }
-    let mut html = rounds_table(&data_dir.join("improve/summary.json"));
-    for round in rounds {
-        let _ = writeln!(html, "<h3>Round {}</h3>", round.number);
+pub(crate) fn improve_section(rounds: &[Round], files: &mut Files) -> anyhow::Result<String> {
+    let mut html = String::new();
+    for (i, round) in rounds.iter().enumerate() {
+        if i == 0 || rounds[i - 1].run != round.run {
+            let _ = writeln!(
+                html,
+                "<h3>Rounds in {}</h3>",
+                esc(&round.run.display().to_string())
+            );
+            html.push_str(&rounds_table(&round.run.join(improve_summary::FILE)));
+        }
+        let _ = writeln!(html, "<h3>{}</h3>", esc(&round.name));
         if round.entries.is_empty() {
-            html.push_str(
-                "<p class=\"note\">No evaluation of this round's model: <code>graspmap improve --eval-seeds LIST</code> evaluates each round's.</p>\n",
+            // As improve --eval-seeds would have: the report kept in the round's folder.
+            let model = round.dir.join("model").join("best.safetensors");
+            let command = super::html::command(
+                &round.dir,
+                &format!(
+                    "eval --task empty_bin --n-past-action 8 --checkpoint {}",
+                    shell_word(&model.display().to_string())
+                ),
+            );
+            let _ = writeln!(
+                html,
+                "<p class=\"note\">No evaluation of this round's model: <code>{}</code> makes one.</p>",
+                esc(&command)
             );
         }
         for entry in &round.entries {
@@ -70,30 +111,28 @@ pub(crate) fn improve_section(
 /// model's best validation loss. A summary that is missing or unreadable is said so, not an
 /// error: the rounds' evaluations stand without it.
 fn rounds_table(path: &Path) -> String {
-    let rounds = std::fs::read_to_string(path)
-        .ok()
-        .and_then(|text| serde_json::from_str::<serde_json::Value>(&text).ok())
-        .and_then(|v| v.as_array().cloned());
-    let Some(rounds) = rounds else {
-        return format!(
-            "<p class=\"note\">{} is missing or unreadable: the rounds' collection figures are not shown.</p>\n",
-            esc(&path.display().to_string())
-        );
+    let rounds = match improve_summary::read_all(path) {
+        Ok(rounds) => rounds,
+        Err(e) => {
+            return format!(
+                "<p class=\"note\">The rounds' collection figures are not shown: {}.</p>\n",
+                esc(&format!("{e:#}"))
+            )
+        }
     };
     let mut html = String::from(
         "<table><tr><th>round</th><th>trials collected</th><th>of which succeeded</th><th>trials so far</th><th>best validation loss</th><th>model</th></tr>\n",
     );
     for round in &rounds {
-        let number = |key: &str| round[key].as_f64().unwrap_or(f64::NAN);
         let _ = writeln!(
             html,
             "<tr><td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{:.1} %</td><td class=\"num\">{}</td><td class=\"num\">{:.5}</td><td><code>{}</code></td></tr>",
-            number("round"),
-            number("trials"),
-            100.0 * number("collection_success_rate"),
-            number("trials_so_far"),
-            number("best_val_loss"),
-            esc(round["model"].as_str().unwrap_or("–"))
+            round.round,
+            round.trials,
+            100.0 * round.collection_success_rate,
+            round.trials_so_far,
+            round.best_val_loss,
+            esc(&round.model.display().to_string())
         );
     }
     html.push_str("</table>\n");

@@ -5,62 +5,10 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::Context as _;
-use serde::Deserialize;
-
-use crate::assets::BUNDLED_PREFIX;
 use crate::named::Named;
 use crate::policy::PolicyKind;
-use crate::present::eval_report::{EvalResults, Task};
-use crate::present::kept_reports::{Comparable, DEFAULT_MAX_ATTEMPTS};
-
-/// A kept `graspmap.eval` report: its results as `eval` writes them, and the two settings of
-/// its run the page needs (other fields are ignored).
-#[derive(Debug, Deserialize)]
-pub(super) struct Kept {
-    schema: String,
-    #[serde(default)]
-    pub(super) git_commit: String,
-    pub(super) config: RunSettings,
-    pub(super) results: EvalResults,
-}
-
-/// Where the evaluation ran, what it recorded, and the settings that decide what it can be
-/// compared with, from the report's resolved config.
-#[derive(Debug, Deserialize)]
-pub(super) struct RunSettings {
-    pub(super) global: RunGlobal,
-    #[serde(default)]
-    pub(super) record: Option<PathBuf>,
-    /// The whole sweep's seeds (older reports: the results' seeds).
-    #[serde(default)]
-    seeds: Option<Vec<u64>>,
-    #[serde(default)]
-    max_attempts: Option<u32>,
-    #[serde(default)]
-    give_up_after: Option<u32>,
-    #[serde(default)]
-    objects: Vec<String>,
-    #[serde(default)]
-    shard: Option<String>,
-}
-
-#[derive(Debug, Deserialize)]
-pub(super) struct RunGlobal {
-    pub(super) data: PathBuf,
-    #[serde(default = "bundled_objects")]
-    objects_dir: PathBuf,
-    #[serde(default = "bundled_split")]
-    split_path: PathBuf,
-}
-
-fn bundled_objects() -> PathBuf {
-    PathBuf::from(format!("{BUNDLED_PREFIX}objects"))
-}
-
-fn bundled_split() -> PathBuf {
-    PathBuf::from(format!("{BUNDLED_PREFIX}objects/split.json"))
-}
+use crate::present::eval_report::{EvalReport, Task};
+use crate::present::kept_reports::Comparable;
 
 /// One kept report, read and checked.
 pub(super) struct Entry {
@@ -69,7 +17,7 @@ pub(super) struct Entry {
     pub(super) task: Task,
     pub(super) policy: PolicyKind,
     pub(super) settings: Comparable,
-    pub(super) report: Kept,
+    pub(super) report: EvalReport,
     /// The data directory whose `reports/` kept it: the files it recorded are looked for there.
     pub(super) home: PathBuf,
     /// The folder of the report's files that holds its pictures and video: one per kept report
@@ -177,32 +125,15 @@ pub(super) fn read_kept(home: &Path, prefix: &str) -> anyhow::Result<Vec<Entry>>
 }
 
 fn read_one(path: &Path, home: &Path, prefix: &str) -> anyhow::Result<Entry> {
-    let fix = "delete it, or run that evaluation again";
-    let text = std::fs::read_to_string(path)
-        .with_context(|| format!("reading the eval report {}", path.display()))?;
-    let report: Kept = serde_json::from_str(&text).map_err(|e| {
-        anyhow::anyhow!(
-            "{} is not a graspmap eval report ({e}); {fix}",
-            path.display()
-        )
-    })?;
-    if !matches!(
-        report.schema.as_str(),
-        "graspmap.eval/1" | "graspmap.eval/2"
-    ) {
-        anyhow::bail!(
-            "{}: unknown schema '{}'; {fix}",
-            path.display(),
-            report.schema
-        );
-    }
-    let (task, policy) = (report.results.task, report.results.policy);
+    // The one strict reader of eval reports: what merge and --resume accept, the page shows.
+    let report = EvalReport::read(path, "delete it, or run that evaluation again")?;
+    let (task, policy) = (report.config.task, report.config.policy);
     let config = &report.config;
     let settings = Comparable::new(
         task,
-        config.seeds.as_deref().unwrap_or(&report.results.seeds),
-        config.max_attempts.unwrap_or(DEFAULT_MAX_ATTEMPTS),
-        config.give_up_after.unwrap_or(0),
+        &config.seeds,
+        config.max_attempts,
+        config.give_up_after,
         &config.global.objects_dir,
         &config.global.split_path,
         &config.objects,

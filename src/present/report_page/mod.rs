@@ -35,7 +35,7 @@ pub(crate) fn write_report_page(data_dir: &Path, out_html: &Path) -> anyhow::Res
             out_html.join("report.html").display()
         );
     }
-    let mut files = Files::new(out_html);
+    let mut files = Files::new(out_html, data_dir);
     let main = kept::read_kept(data_dir, "")?;
     let rounds = improve::read_rounds(data_dir)?;
     let (mut body, top) = summary::summary_section(&main, &rounds, &mut files)?;
@@ -48,7 +48,7 @@ pub(crate) fn write_report_page(data_dir: &Path, out_html: &Path) -> anyhow::Res
         "Evaluations: every kept report, its tables, pictures and video",
         &evals,
     ));
-    let improve = improve::improve_section(data_dir, &rounds, &mut files)?;
+    let improve = improve::improve_section(&rounds, &mut files)?;
     if !improve.is_empty() {
         body.push_str(&fold("Learning from trials: the improve rounds", &improve));
     }
@@ -81,11 +81,14 @@ mod tests {
     fn an_empty_data_directory_gives_a_page_of_missing_parts() {
         let dir = tempfile::tempdir().unwrap();
         let out = dir.path().join("r.html");
-        let written = write_report_page(&dir.path().join("nothing"), &out).unwrap();
+        let data = dir.path().join("nothing");
+        let written = write_report_page(&data, &out).unwrap();
         assert_eq!(written, std::slice::from_ref(&out));
         let html = std::fs::read_to_string(&out).unwrap();
-        for command in ["graspmap label", "graspmap train", "graspmap eval --task"] {
-            assert!(html.contains(command), "{command} missing from {html}");
+        // Each names the data directory, so that it runs as printed from anywhere.
+        for command in ["label", "train --epochs 30", "eval --task train"] {
+            let command = html::command(&data, command);
+            assert!(html.contains(&command), "{command} missing from {html}");
         }
         assert!(!html.contains("{{"), "a placeholder is left");
     }

@@ -7,7 +7,7 @@ use std::path::Path;
 use anyhow::Context as _;
 
 use super::files::Files;
-use super::html::{esc, missing};
+use super::html::{command, esc, missing};
 use crate::data::labels::LabelStore;
 use crate::grasp::draw::draw_grasp;
 use crate::grasp::PixelGrasp;
@@ -23,7 +23,7 @@ pub(crate) fn labels_section(data_dir: &Path, files: &mut Files) -> anyhow::Resu
     let mut html = String::new();
     let store = LabelStore::new(data_dir.join("labels"));
     if !store.labels_path().is_file() {
-        html.push_str(&missing("No labels yet", "graspmap label"));
+        html.push_str(&missing("No labels yet", &command(data_dir, "label")));
         return Ok(html);
     }
     let labels = store.load()?;
@@ -52,8 +52,9 @@ pub(crate) fn labels_section(data_dir: &Path, files: &mut Files) -> anyhow::Resu
         let Ok(image) = image::open(&path) else {
             let _ = writeln!(
                 html,
-                "<p class=\"missing\">{} is missing or unreadable: <code>graspmap label --check</code> says more.</p>",
-                esc(&path.display().to_string())
+                "<p class=\"missing\">{} is missing or unreadable: <code>{}</code> says more.</p>",
+                esc(&path.display().to_string()),
+                esc(&command(data_dir, "label --check"))
             );
             continue;
         };
@@ -98,10 +99,13 @@ pub(crate) fn training_section(data_dir: &Path, files: &mut Files) -> anyhow::Re
     let affordance = data_dir.join("affordance");
     let csv = affordance.join("losses.csv");
     if !csv.is_file() {
-        html.push_str(&missing("No model yet", "graspmap train --epochs 30"));
+        html.push_str(&missing(
+            "No model yet",
+            &command(data_dir, "train --epochs 30"),
+        ));
         return Ok(html);
     }
-    html.push_str(&loss_summary(&csv)?);
+    html.push_str(&loss_summary(&csv, data_dir)?);
     let png = affordance.join("losses.png");
     if png.is_file() {
         let link = files.copy(&png, "losses.png")?;
@@ -123,7 +127,7 @@ pub(crate) fn training_section(data_dir: &Path, files: &mut Files) -> anyhow::Re
 }
 
 /// Epochs, last losses and the best validation loss, from losses.csv.
-fn loss_summary(csv: &Path) -> anyhow::Result<String> {
+fn loss_summary(csv: &Path, data_dir: &Path) -> anyhow::Result<String> {
     let text =
         std::fs::read_to_string(csv).with_context(|| format!("reading {}", csv.display()))?;
     let bad = || {
@@ -147,7 +151,7 @@ fn loss_summary(csv: &Path) -> anyhow::Result<String> {
     let Some(&(last, train, val)) = rows.last() else {
         return Ok(missing(
             "losses.csv has no epoch yet",
-            "graspmap train --epochs 30",
+            &command(data_dir, "train --epochs 30"),
         ));
     };
     let best = rows

@@ -82,7 +82,7 @@ pub(crate) fn summary_section(
             let pool = groups(main.iter().filter(|e| e.task == entry.task));
             rows.push(Row {
                 task: entry.task,
-                label: format!("improve round {}: {}", round.number, entry.task.name()),
+                label: format!("{}: {}", round.name, entry.task.name()),
                 model: Some(entry),
                 settings: Some(&entry.settings),
                 pool: pool.into_iter().flatten().collect(),
@@ -113,16 +113,17 @@ fn table_row(row: &Row, files: &mut Files) -> anyhow::Result<String> {
     }
     html.push_str("</th>");
     if row.settings.is_none() {
+        let command = files.command(&format!("eval --task {}", row.task.name()));
         let _ = writeln!(
             html,
-            "<td class=\"none\" colspan=\"3\">not run yet: <code>graspmap eval --task {}</code>, then <code>--policy random</code> and <code>--policy oracle</code> for the baselines</td></tr>",
-            row.task.name()
+            "<td class=\"none\" colspan=\"3\">not run yet: <code>{}</code>, and with --policy random and --policy oracle for the baselines</td></tr>",
+            esc(&command)
         );
         return Ok(html);
     }
     html.push_str(&match row.model {
         Some(entry) => cell(entry, row.task, files)?,
-        None => not_run(row, PolicyKind::Model),
+        None => not_run(row, PolicyKind::Model, files),
     });
     let mut warnings = Vec::new();
     for policy in BASELINES {
@@ -145,7 +146,7 @@ fn table_row(row: &Row, files: &mut Files) -> anyhow::Result<String> {
                 });
                 cell(entry, row.task, files)?.replacen("<td>", "<td class=\"other\">⚠ ", 1)
             }
-            None => not_run(row, policy),
+            None => not_run(row, policy, files),
         });
     }
     html.push_str("</tr>\n");
@@ -263,7 +264,7 @@ fn cell(entry: &Entry, task: Task, files: &mut Files) -> anyhow::Result<String> 
 }
 
 /// The cell of a policy with no run yet: the command that makes one.
-fn not_run(row: &Row, policy: PolicyKind) -> String {
+fn not_run(row: &Row, policy: PolicyKind, files: &Files) -> String {
     if row.task == Task::Scenes {
         return format!(
             "<td class=\"none\">not run: the model's eval command with <code>--policy {}</code></td>",
@@ -274,11 +275,14 @@ fn not_run(row: &Row, policy: PolicyKind) -> String {
         .settings
         .filter(|s| !s.is_default())
         .map_or_else(String::new, Comparable::eval_flags);
-    format!(
-        "<td class=\"none\">not run: <code>graspmap eval --task {} --policy {}{}</code></td>",
+    let command = files.command(&format!(
+        "eval --task {} --policy {}{flags}",
         row.task.name(),
-        policy.name(),
-        esc(&flags)
+        policy.name()
+    ));
+    format!(
+        "<td class=\"none\">not run: <code>{}</code></td>",
+        esc(&command)
     )
 }
 
@@ -316,7 +320,10 @@ fn first_media(
         None => {
             html.push_str(&super::html::missing(
                 "No episode video yet",
-                "graspmap eval --task empty_bin --n-past-action 8 --record DATA/demo/empty_bin.mp4",
+                &files.command(&format!(
+                    "eval --task empty_bin --n-past-action 8 --record {}",
+                    files.video_path("empty_bin.mp4")
+                )),
             ));
             None
         }
@@ -354,15 +361,26 @@ mod tests {
     /// `home/reports`, as `eval` names the defaults' (the page reads the settings inside).
     fn keep(home: &Path, task: Task, policy: PolicyKind, seeds: &[u64], tag: &str) {
         let results = summarise(task, policy, seeds.to_vec(), &[], Vec::new(), 0.0, false);
-        let report = serde_json::json!({
-            "schema": "graspmap.eval/2",
-            "git_commit": "abc",
-            "config": { "global": { "data": home }, "seeds": seeds, "objects": ["YcbBanana"] },
-            "results": results,
+        // Every setting eval writes: the page reads kept reports as strictly as merge does.
+        let config = serde_json::json!({
+            "global": {
+                "data": home,
+                "objects_dir": "bundled:objects",
+                "split_path": "bundled:objects/split.json",
+            },
+            "task": task,
+            "policy": policy,
+            "seeds": seeds,
+            "objects": ["YcbBanana"],
+            "suppression": { "remember": 0 },
+            "max_attempts": 25,
+            "give_up_after": 0,
+            "record": null,
         });
         let name = format!("eval_{}_{}{tag}.json", task.name(), policy.name());
-        std::fs::create_dir_all(home.join("reports")).unwrap();
-        std::fs::write(home.join("reports").join(name), report.to_string()).unwrap();
+        let path = home.join("reports").join(name);
+        crate::present::envelope::write_versioned_report(&path, "eval", 2, 0, &config, &results)
+            .unwrap();
     }
 
     #[test]
@@ -393,8 +411,12 @@ mod tests {
         assert!(!html.contains("⚠ random"));
         // The round's report and DATA's share a name; each keeps its own copy.
         assert!(html.contains("r_files/reports/improve_round_02_eval_empty_bin_model.json"));
-        assert!(html.contains(
-            "<td class=\"none\" colspan=\"3\">not run yet: <code>graspmap eval --task train</code>"
-        ));
+        let data = crate::named::shell_word(&data.display().to_string());
+        assert!(
+            html.contains(&format!(
+                "<td class=\"none\" colspan=\"3\">not run yet: <code>graspmap --data {data} eval --task train</code>"
+            )),
+            "{html}"
+        );
     }
 }

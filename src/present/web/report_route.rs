@@ -4,6 +4,7 @@
 use std::path::{Path, PathBuf};
 
 use super::{Reply, Request};
+use crate::data::output::Kind;
 use crate::present::report_page::{files_dir, write_report_page};
 
 /// Serves the report of the run under `data` (written to `out` and its `_files` folder).
@@ -38,6 +39,17 @@ impl ReportRoute {
     }
 
     fn page(&self) -> Reply {
+        // The page may be one the user wrote there: it is theirs, and the route never asked.
+        if self.out.exists() && !Kind::ReportPage.holds(&self.out) {
+            return Reply::error(
+                409,
+                &format!(
+                    "{} exists and is not a page graspmap report wrote; move it away, or write the report over it with graspmap --data {} report --force",
+                    self.out.display(),
+                    self.data.display()
+                ),
+            );
+        }
         match write_report_page(&self.data, &self.out).and_then(|_| {
             std::fs::read(&self.out).map_err(|e| anyhow::anyhow!("{}: {e}", self.out.display()))
         }) {

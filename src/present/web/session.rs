@@ -302,7 +302,7 @@ impl LabelSession {
         let steps = body
             .get("steps")
             .and_then(|v| v.as_i64())
-            .filter(|s| s.abs() <= 8)
+            .filter(|s| (-8..=8).contains(s))
             .ok_or_else(|| {
                 Reply::error(400, "\"steps\" must be an integer in -8..=8 (22.5° each)")
             })?;
