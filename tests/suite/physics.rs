@@ -304,7 +304,9 @@ fn a_push_slides_a_tin_off_the_box_beside_it_and_keeps_both_in_the_bin() {
         v: v as u32,
         angle_deg: 0.0,
     };
-    let push = plan_push(&HeightMap::new(&camera, &frame), grasp).expect("free floor round it");
+    let rgb = frame.to_rgb_image();
+    let push = plan_push(&HeightMap::new(&camera, &frame), rgb.as_raw(), grasp)
+        .expect("free floor round it");
     let apart = |cell: &Workcell| {
         let d = cell.object_pose(brick).translation - cell.object_pose(gelatin).translation;
         Vector::new(d.x, d.y, 0.0).length()
