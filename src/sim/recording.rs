@@ -8,7 +8,7 @@ use image::RgbImage;
 
 use super::oblique_camera;
 use crate::vision::camera::Camera;
-use crate::vision::render::{render_rgb_over, Backdrop, Drawable};
+use crate::vision::render::{render_rgb_over, Backdrop, Drawable, Shape};
 
 /// The scene at one instant: the scenery, shared between snapshots of the same workcell so
 /// that it is rendered once, and everything that moves.
@@ -34,6 +34,8 @@ pub(crate) type FootageSender = Sender<Footage>;
 pub(crate) struct ObliqueFilm {
     camera: Camera,
     backdrop: Option<(Arc<[Drawable]>, Backdrop)>,
+    /// The last frame, and the moving drawables it shows: a scene at rest is not drawn again.
+    last: Option<(Vec<Drawable>, RgbImage)>,
 }
 
 impl ObliqueFilm {
@@ -41,6 +43,7 @@ impl ObliqueFilm {
         Self {
             camera: oblique_camera(),
             backdrop: None,
+            last: None,
         }
     }
 
@@ -58,13 +61,66 @@ impl ObliqueFilm {
             .is_some_and(|(scenery, _)| Arc::ptr_eq(scenery, &snapshot.scenery));
         if stale {
             self.backdrop = None;
+            self.last = None;
+        }
+        if let Some((moving, frame)) = &self.last {
+            let same = moving.len() == snapshot.moving.len()
+                && moving
+                    .iter()
+                    .zip(&snapshot.moving)
+                    .all(|(a, b)| identical(a, b));
+            if same {
+                return frame.clone();
+            }
         }
         let (_, backdrop) = self.backdrop.get_or_insert_with(|| {
             let backdrop = Backdrop::new(&self.camera, &snapshot.scenery);
             (snapshot.scenery.clone(), backdrop)
         });
-        render_rgb_over(&self.camera, backdrop, &snapshot.moving)
+        let frame = render_rgb_over(&self.camera, backdrop, &snapshot.moving);
+        self.last = Some((snapshot.moving.clone(), frame.clone()));
+        frame
     }
+}
+
+/// Whether two drawables are bit for bit the same, so that rendering is sure to draw them
+/// alike (a mesh: the same one, not merely equal vertices, which would take longer to compare
+/// than to draw).
+fn identical(a: &Drawable, b: &Drawable) -> bool {
+    let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<u32>>();
+    let same_shape = match (&a.shape, &b.shape) {
+        (Shape::Mesh(m), Shape::Mesh(n)) => Arc::ptr_eq(m, n),
+        (Shape::Cuboid { half_extents: h }, Shape::Cuboid { half_extents: k }) => {
+            bits(&h.to_array()) == bits(&k.to_array())
+        }
+        (Shape::Sphere { radius: r }, Shape::Sphere { radius: s }) => r.to_bits() == s.to_bits(),
+        (
+            Shape::Cylinder {
+                radius: r,
+                half_height: h,
+            },
+            Shape::Cylinder {
+                radius: s,
+                half_height: k,
+            },
+        )
+        | (
+            Shape::Capsule {
+                radius: r,
+                half_height: h,
+            },
+            Shape::Capsule {
+                radius: s,
+                half_height: k,
+            },
+        ) => bits(&[*r, *h]) == bits(&[*s, *k]),
+        _ => false,
+    };
+    same_shape
+        && a.id == b.id
+        && bits(&a.color) == bits(&b.color)
+        && bits(&a.pose.translation.to_array()) == bits(&b.pose.translation.to_array())
+        && bits(&a.pose.rotation.to_array()) == bits(&b.pose.rotation.to_array())
 }
 
 #[cfg(test)]
