@@ -632,7 +632,7 @@ mod tests {
     #[test]
     fn task_names_are_spelled_as_the_reference_spells_them() {
         let names: Vec<&str> = Task::ALL.iter().map(|t| t.name()).collect();
-        assert_eq!(names, ["train", "test", "empty_bin"]);
+        assert_eq!(names, ["train", "test", "empty_bin", "scenes"]);
         let cli = Cli::try_parse_from(["graspmap", "eval", "--task", "empty_bin"]).unwrap();
         let Command::Eval(args) = cli.command else {
             panic!("parsed as another command")

@@ -11,6 +11,7 @@ mod penetration;
 pub mod pick;
 mod place;
 pub mod push;
+pub(crate) mod recording;
 pub(crate) mod robot;
 mod shapes;
 mod stepping;
@@ -113,7 +114,8 @@ pub struct Workcell {
     pub(crate) arm: Arm,
     pub(crate) gripper: Gripper,
     pub(crate) objects: Vec<SceneObject>,
-    scenery: Vec<Drawable>,
+    /// Shared with the recording's snapshots, which render it once per workcell.
+    scenery: std::sync::Arc<[Drawable]>,
     environment: Vec<ColliderHandle>,
     steps: u64,
     recorder: Option<Recorder>,
@@ -130,16 +132,17 @@ pub struct Workcell {
     fast_substeps: u32,
 }
 
-/// Renders an extra view every few steps while the arm moves (for `--record`), on a thread of
-/// its own: the physics runs on one core, and rendering a frame in line with it took about as
-/// long as the 24 steps between frames.
+/// Sends a snapshot of the scene every few steps while the arm moves (for `--record`) to a
+/// thread that renders it: the physics runs on one core, and rendering a frame in line with it
+/// took about as long as the 24 steps between frames.
 struct Recorder {
-    /// Render every this many physics steps.
+    /// Snapshot every this many physics steps.
     every: u64,
-    /// Snapshots of the scene, in step order, for the render thread.
-    scenes: std::sync::mpsc::Sender<Vec<Drawable>>,
-    /// The render thread; it returns the frames once `scenes` is closed.
-    renderer: std::thread::JoinHandle<Vec<image::RgbImage>>,
+    /// Where the snapshots go, in step order.
+    footage: recording::FootageSender,
+    /// The render thread of [`Workcell::start_recording`], which returns the frames once
+    /// `footage` is closed; `None` when the footage goes to a recording the caller owns.
+    renderer: Option<std::thread::JoinHandle<Vec<image::RgbImage>>>,
 }
 
 impl Workcell {
@@ -160,7 +163,7 @@ impl Workcell {
             arm,
             gripper,
             objects: Vec::new(),
-            scenery,
+            scenery: scenery.into(),
             environment,
             steps: 0,
             recorder: None,
@@ -198,33 +201,58 @@ impl Workcell {
         self.arm.tool0_pose(&self.arm.joints)
     }
 
-    /// Starts recording frames of the oblique view of the whole workcell every `every` steps.
+    /// Starts recording frames of the oblique view of the whole workcell every `every` steps,
+    /// for [`Workcell::take_recording`] to return.
     pub(crate) fn start_recording(&mut self, every: u64) {
-        let camera = oblique_camera();
-        let (scenes, received) = std::sync::mpsc::channel::<Vec<Drawable>>();
+        let (footage, received) = std::sync::mpsc::channel();
         let renderer = std::thread::spawn(move || {
+            let mut film = recording::ObliqueFilm::new();
             received
                 .iter()
-                .map(|scene| crate::vision::render::render(&camera, &scene).to_rgb_image())
+                .filter_map(|footage| match footage {
+                    recording::Footage::Scene(snapshot) => Some(film.frame(&snapshot)),
+                    recording::Footage::Inset(_) => None,
+                })
                 .collect()
         });
         self.recorder = Some(Recorder {
             every: every.max(1),
-            scenes,
-            renderer,
+            footage,
+            renderer: Some(renderer),
         });
     }
 
-    /// Stops recording and returns the frames.
+    /// Sends a snapshot of the scene to `footage` every `every` steps, until
+    /// [`Workcell::take_recording`]; the caller's recording renders them, and the workcell never
+    /// waits for it.
+    pub(crate) fn record_into(&mut self, every: u64, footage: recording::FootageSender) {
+        self.recorder = Some(Recorder {
+            every: every.max(1),
+            footage,
+            renderer: None,
+        });
+    }
+
+    /// Stops recording; the frames of [`Workcell::start_recording`] (none for
+    /// [`Workcell::record_into`], whose frames are its recording's).
     pub(crate) fn take_recording(&mut self) -> Vec<image::RgbImage> {
-        self.recorder
-            .take()
-            .map(|r| {
-                drop(r.scenes);
-                // A render thread that panicked leaves no frames; the attempt itself is unharmed.
-                r.renderer.join().unwrap_or_default()
-            })
+        let Some(recorder) = self.recorder.take() else {
+            return Vec::new();
+        };
+        drop(recorder.footage);
+        // A render thread that panicked leaves no frames; the attempt itself is unharmed.
+        recorder
+            .renderer
+            .map(|r| r.join().unwrap_or_default())
             .unwrap_or_default()
+    }
+
+    /// What a recording's frame shows now.
+    pub(crate) fn snapshot(&self) -> recording::Snapshot {
+        recording::Snapshot {
+            scenery: self.scenery.clone(),
+            moving: self.moving_drawables(),
+        }
     }
 
     /// Adds an object at `pose`, at rest.
@@ -307,7 +335,15 @@ impl Workcell {
 
     /// Everything drawable, in world coordinates; object ids are index + 1, the rest 0.
     pub fn drawables(&self) -> Vec<Drawable> {
-        let mut out = self.scenery.clone();
+        let mut out = self.scenery.to_vec();
+        out.extend(self.moving_drawables());
+        out
+    }
+
+    /// The drawables of the arm, the hand and the objects: [`Workcell::drawables`] without the
+    /// scenery, in the same order.
+    fn moving_drawables(&self) -> Vec<Drawable> {
+        let mut out = Vec::new();
         for (pose, visual) in self.arm.visuals() {
             out.push(Drawable {
                 shape: visual.shape.clone(),

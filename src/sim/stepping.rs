@@ -4,7 +4,7 @@
 use rapier3d::prelude::RigidBodyHandle;
 
 use super::penetration::DropMisfiredContacts;
-use super::{Workcell, PHYSICS_HZ};
+use super::{recording, Workcell, PHYSICS_HZ};
 use crate::sim::kinematics::Joints;
 
 /// Consecutive still steps (0.25 s) that count as settled.
@@ -44,10 +44,10 @@ impl Workcell {
             .as_ref()
             .is_some_and(|r| self.steps.is_multiple_of(r.every));
         if due {
-            let scene = self.drawables();
+            let snapshot = self.snapshot();
             if let Some(r) = &self.recorder {
-                // The render thread only stops when the recording is taken.
-                let _ = r.scenes.send(scene);
+                // A recording that stopped listening (its thread failed) leaves the physics be.
+                let _ = r.footage.send(recording::Footage::Scene(snapshot));
             }
         }
     }

@@ -98,6 +98,39 @@ pub fn render(camera: &Camera, scene: &[Drawable]) -> Frame {
     render_impl(camera, scene, true)
 }
 
+/// The pixels of a scene's unchanging part (the floor, the totes, the pedestal), rendered once so
+/// that each later frame casts rays only for what moves: the floor alone covers nearly every
+/// pixel, and recasting it took most of a recorded frame's time.
+#[derive(Clone)]
+pub(crate) struct Backdrop {
+    target: Target,
+}
+
+impl Backdrop {
+    /// `still` as seen by `camera`.
+    pub(crate) fn new(camera: &Camera, still: &[Drawable]) -> Self {
+        let view = View::new(camera);
+        let mut target = Target::new(camera);
+        draw_all(&view, &mut target, still, true);
+        Self { target }
+    }
+}
+
+/// The colours of `moving` rendered over a backdrop made with the same camera: those of
+/// [`render`] of the backdrop's drawables followed by `moving`, because drawing continues from
+/// the very buffers that rendering the backdrop's drawables first would have left.
+pub(crate) fn render_rgb_over(
+    camera: &Camera,
+    backdrop: &Backdrop,
+    moving: &[Drawable],
+) -> image::RgbImage {
+    let view = View::new(camera);
+    let mut target = backdrop.target.clone();
+    draw_all(&view, &mut target, moving, true);
+    image::RgbImage::from_raw(camera.width, camera.height, target.rgb.into_flattened())
+        .expect("rgb buffer length matches the camera's size")
+}
+
 /// Casts one world-space ray against a single drawable; `t` is in multiples of `dir` and
 /// the normal is in world coordinates.
 ///
@@ -304,6 +337,7 @@ fn pixel_span(lo: f32, hi: f32, size: u32) -> Option<(usize, usize)> {
 }
 
 /// Depth, id and colour buffers being filled.
+#[derive(Clone)]
 struct Target {
     width: usize,
     near: f32,
@@ -345,7 +379,7 @@ impl Target {
         Frame {
             width: camera.width,
             height: camera.height,
-            rgb: self.rgb.into_iter().flatten().collect(),
+            rgb: self.rgb.into_flattened(),
             depth: self.depth,
             mask: self.mask,
         }
@@ -363,19 +397,25 @@ fn shade(albedo: [f32; 3], cos_light: f32) -> [u8; 3] {
 fn render_impl(camera: &Camera, scene: &[Drawable], cull: bool) -> Frame {
     let view = View::new(camera);
     let mut target = Target::new(camera);
+    draw_all(&view, &mut target, scene, cull);
+    target.into_frame(camera)
+}
+
+/// Draws `scene` into `target`, in order.
+fn draw_all(view: &View, target: &mut Target, scene: &[Drawable], cull: bool) {
     for drawable in scene {
         match &drawable.shape {
             Shape::Cuboid { half_extents } => {
                 let h = *half_extents;
-                draw_primitive(&view, &mut target, drawable, h, cull, |o, d, t0, t1| {
+                draw_primitive(view, target, drawable, h, cull, |o, d, t0, t1| {
                     raycast::ray_cuboid(o, d, h, t0, t1)
                 });
             }
             Shape::Sphere { radius } => {
                 let r = *radius;
                 draw_primitive(
-                    &view,
-                    &mut target,
+                    view,
+                    target,
                     drawable,
                     Vec3::splat(r),
                     cull,
@@ -388,7 +428,7 @@ fn render_impl(camera: &Camera, scene: &[Drawable], cull: bool) -> Frame {
             } => {
                 let (r, hh) = (*radius, *half_height);
                 let half = Vec3::new(r, hh, r);
-                draw_primitive(&view, &mut target, drawable, half, cull, |o, d, t0, t1| {
+                draw_primitive(view, target, drawable, half, cull, |o, d, t0, t1| {
                     raycast::ray_cylinder(o, d, r, hh, t0, t1)
                 });
             }
@@ -398,14 +438,13 @@ fn render_impl(camera: &Camera, scene: &[Drawable], cull: bool) -> Frame {
             } => {
                 let (r, hh) = (*radius, *half_height);
                 let half = Vec3::new(r, hh + r, r);
-                draw_primitive(&view, &mut target, drawable, half, cull, |o, d, t0, t1| {
+                draw_primitive(view, target, drawable, half, cull, |o, d, t0, t1| {
                     raycast::ray_capsule(o, d, r, hh, t0, t1)
                 });
             }
-            Shape::Mesh(mesh) => draw_mesh(&view, &mut target, drawable, mesh, cull),
+            Shape::Mesh(mesh) => draw_mesh(view, target, drawable, mesh, cull),
         }
     }
-    target.into_frame(camera)
 }
 
 /// Casts the pixels covered by a primitive's projected local bounding box `[-half, half]`,

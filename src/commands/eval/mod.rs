@@ -6,7 +6,6 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::Context as _;
-use image::RgbImage;
 
 mod config;
 mod scene;
@@ -27,7 +26,7 @@ use crate::policy::PolicyKind;
 use crate::present::envelope::write_versioned_report;
 use crate::present::eval_report::Task;
 use crate::present::eval_report::{report_lines, summarise, AttemptRecord, SceneRun};
-use crate::present::video::save_video_atomic;
+use crate::present::video::EpisodeVideo;
 use crate::sim::WorkcellConfig;
 pub(crate) use config::{
     give_up_by_default, pushes_by_default, single_object_seed, EvalConfig, ATTEMPTS_PER_OBJECT,
@@ -57,10 +56,10 @@ struct Evaluation<'a> {
 }
 
 /// What each thread owns: its policy, with its own copy of the network, and with --record
-/// the episode's frames.
+/// the episode's video, made on a thread of its own while the episode runs.
 struct Worker {
     policy: Box<dyn Policy + Send>,
-    recording: Option<Vec<RgbImage>>,
+    recording: Option<EpisodeVideo>,
 }
 
 /// A piece of an evaluation that runs on its own: an empty_bin scene, or one attempt of
@@ -167,9 +166,10 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         ));
     }
     let mut video_encode_s = None;
-    if let (Some(path), Some(frames)) = (&config.record, &recording) {
+    if let (Some(path), Some(video)) = (&config.record, recording) {
         let encoding = Instant::now();
-        save_video_atomic(frames, EPISODE_EVERY_STEPS, path)
+        video
+            .finish(path, EPISODE_EVERY_STEPS)
             .with_context(|| format!("writing --record {}", path.display()))?;
         video_encode_s = Some(encoding.elapsed().as_secs_f64());
         context.say(&format!("wrote the episode video to {}", path.display()));
@@ -186,7 +186,8 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
 struct Ran {
     start: Instant,
     workers: usize,
-    /// Seconds spent encoding and writing the --record video.
+    /// Seconds from the episode's end to the --record video written: the frames the video's
+    /// thread had still to make, and the file.
     video_encode_s: Option<f64>,
 }
 
@@ -382,7 +383,7 @@ impl Evaluation<'_> {
         (models, scenes): (&[ObjectModel], &[ArrangedScene]),
         (workers, network_threads): (usize, u16),
         runs: &mut Vec<SceneRun>,
-    ) -> anyhow::Result<Option<Vec<RgbImage>>> {
+    ) -> anyhow::Result<Option<EpisodeVideo>> {
         let per_seed = models.len() * ATTEMPTS_PER_OBJECT as usize;
         let mut attempts_of: BTreeMap<u64, Vec<AttemptRecord>> = BTreeMap::new();
         let states = workers::run_in_order(
@@ -392,7 +393,9 @@ impl Evaluation<'_> {
                 crate::model::use_threads(network_threads);
                 Ok(Worker {
                     policy: policy(config)?,
-                    recording: config.record.as_ref().map(|_| Vec::new()),
+                    recording: (config.record.as_ref())
+                        .map(|path| EpisodeVideo::start(path, EPISODE_EVERY_STEPS))
+                        .transpose()?,
                 })
             },
             |worker, job| self.run_job(worker, (models, scenes), job),

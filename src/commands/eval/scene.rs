@@ -5,8 +5,6 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use image::RgbImage;
-
 use super::{single_object_seed, Evaluation, Worker, EPISODE_EVERY_STEPS};
 use crate::assets::objects::ObjectModel;
 use crate::commands::arranged::ArrangedScene;
@@ -181,8 +179,13 @@ impl Evaluation<'_> {
             None => None,
         };
         let aimed_at = (decision.grasp.as_ref().ok()).and_then(|&g| look.aimed_at(cell, g));
-        if worker.recording.is_some() {
-            cell.start_recording(EPISODE_EVERY_STEPS);
+        if let Some(video) = &worker.recording {
+            let mut view = rgb.clone();
+            if let Ok(g) = &decision.grasp {
+                draw_grasp(&mut view, g);
+            }
+            video.inset(view);
+            cell.record_into(EPISODE_EVERY_STEPS, video.footage());
         }
         let sim_start = Instant::now();
         let push = match (&decision.grasp, decision.verified) {
@@ -209,14 +212,7 @@ impl Evaluation<'_> {
             (Err(why), None) => PickOutcome::failure(PickReason::Ungraspable, why.to_string()),
         };
         let sim = sim_start.elapsed().as_secs_f64();
-        if let Some(frames) = &mut worker.recording {
-            let mut view = rgb.clone();
-            if let Ok(g) = &decision.grasp {
-                draw_grasp(&mut view, g);
-            }
-            let oblique = cell.take_recording();
-            frames.extend(oblique.iter().map(|o| side_by_side(o, &view)));
-        }
+        cell.take_recording();
         let record = AttemptRecord {
             drop_seed,
             attempt,
@@ -329,19 +325,4 @@ fn count(cell: &Workcell, place: ObjectLocation) -> usize {
     (0..cell.objects().len())
         .filter(|&i| cell.locate(i) == place)
         .count()
-}
-
-/// A video frame: the oblique view, and the camera view with the grasp scaled to its height.
-fn side_by_side(oblique: &RgbImage, camera_view: &RgbImage) -> RgbImage {
-    let height = oblique.height();
-    let scaled = image::imageops::resize(
-        camera_view,
-        height,
-        height,
-        image::imageops::FilterType::Nearest,
-    );
-    let mut out = RgbImage::new(oblique.width() + height, height);
-    image::imageops::replace(&mut out, oblique, 0, 0);
-    image::imageops::replace(&mut out, &scaled, i64::from(oblique.width()), 0);
-    out
 }

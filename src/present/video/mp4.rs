@@ -33,9 +33,117 @@ pub(crate) fn encode_mp4(
     timescale: u32,
     frame_ticks: u32,
 ) -> anyhow::Result<Vec<u8>> {
-    let Some(first) = frames.first() else {
-        bail!("a video needs at least one frame");
-    };
+    let mut video = Mp4Stream::new(timescale, frame_ticks);
+    for frame in frames {
+        video.push(frame)?;
+    }
+    video.finish()
+}
+
+/// An MP4 being encoded a frame at a time, so that a recording can encode while it films and
+/// hold compressed samples rather than raw frames; the bytes are those of [`encode_mp4`] on
+/// the same frames.
+pub(crate) struct Mp4Stream {
+    timescale: u32,
+    frame_ticks: u32,
+    /// Started by the first frame, whose size every later frame must have.
+    encoder: Option<(Encoder, u32, u32)>,
+    sps: Option<Vec<u8>>,
+    pps: Option<Vec<u8>>,
+    samples: Vec<Sample>,
+    /// Frames pushed so far.
+    frames: u64,
+}
+
+impl Mp4Stream {
+    /// A video whose frames each last `frame_ticks` ticks of a `timescale` Hz clock.
+    pub(crate) fn new(timescale: u32, frame_ticks: u32) -> Self {
+        Self {
+            timescale,
+            frame_ticks,
+            encoder: None,
+            sps: None,
+            pps: None,
+            samples: Vec::new(),
+            frames: 0,
+        }
+    }
+
+    /// Encodes the next frame.
+    pub(crate) fn push(&mut self, frame: &image::RgbImage) -> anyhow::Result<()> {
+        let (timescale, frame_ticks) = (self.timescale, self.frame_ticks);
+        let (encoder, width, height) = match &mut self.encoder {
+            Some(started) => started,
+            None => self
+                .encoder
+                .insert(start_encoder(frame, timescale, frame_ticks)?),
+        };
+        let (width, height) = (*width, *height);
+        let i = self.frames;
+        ensure!(
+            frame.dimensions() == (width, height),
+            "frames differ in size ({}×{} after {width}×{height})",
+            frame.width(),
+            frame.height()
+        );
+        let rgb = RgbSliceU8::new(frame.as_raw(), (width as usize, height as usize));
+        let yuv = YUVBuffer::from_rgb8_source(rgb);
+        let millis = i * u64::from(frame_ticks) * 1000 / u64::from(timescale.max(1));
+        let stream = encoder
+            .encode_at(&yuv, openh264::Timestamp::from_millis(millis))
+            .with_context(|| format!("encoding frame {i}"))?;
+        let mut sample = Sample {
+            bytes: Vec::new(),
+            key: stream.frame_type() == FrameType::IDR,
+            ticks: frame_ticks,
+        };
+        for layer in (0..stream.num_layers()).filter_map(|l| stream.layer(l)) {
+            for nal in (0..layer.nal_count()).filter_map(|n| layer.nal_unit(n)) {
+                let nal = strip_start_code(nal);
+                match nal.first().map(|b| b & 0x1f) {
+                    // Parameter sets live once in the track's avcC box, not in the samples.
+                    Some(7) => drop(self.sps.get_or_insert_with(|| nal.to_vec())),
+                    Some(8) => drop(self.pps.get_or_insert_with(|| nal.to_vec())),
+                    Some(_) => {
+                        sample.bytes.extend((nal.len() as u32).to_be_bytes());
+                        sample.bytes.extend_from_slice(nal);
+                    }
+                    None => {}
+                }
+            }
+        }
+        match self.samples.last_mut() {
+            Some(previous) if sample.bytes.is_empty() => previous.ticks += frame_ticks,
+            _ => self.samples.push(sample),
+        }
+        self.frames += 1;
+        Ok(())
+    }
+
+    /// The frames pushed so far, as an MP4 file's bytes (index first).
+    pub(crate) fn finish(self) -> anyhow::Result<Vec<u8>> {
+        let Some((_, width, height)) = self.encoder else {
+            bail!("a video needs at least one frame");
+        };
+        let (Some(sps), Some(pps)) = (self.sps, self.pps) else {
+            bail!("the H.264 encoder produced no parameter sets");
+        };
+        let avc = mp4::AvcConfig {
+            width: u16::try_from(width)?,
+            height: u16::try_from(height)?,
+            seq_param_set: sps,
+            pic_param_set: pps,
+        };
+        fast_start(&mux(avc, self.timescale, &self.samples)?)
+    }
+}
+
+/// An encoder for frames the size of `first`, which H.264 here must accept.
+fn start_encoder(
+    first: &image::RgbImage,
+    timescale: u32,
+    frame_ticks: u32,
+) -> anyhow::Result<(Encoder, u32, u32)> {
     let (width, height) = first.dimensions();
     ensure!(
         width % 2 == 0 && height % 2 == 0 && width <= 3840 && height <= 2160,
@@ -50,58 +158,9 @@ pub(crate) fn encode_mp4(
         .complexity(Complexity::Low)
         .intra_frame_period(IntraFramePeriod::from_num_frames(KEY_FRAME_EVERY))
         .num_threads(1);
-    let mut encoder = Encoder::with_api_config(OpenH264API::from_source(), config)
+    let encoder = Encoder::with_api_config(OpenH264API::from_source(), config)
         .context("starting the H.264 encoder")?;
-    let (mut sps, mut pps) = (None, None);
-    let mut samples: Vec<Sample> = Vec::with_capacity(frames.len());
-    for (i, frame) in frames.iter().enumerate() {
-        ensure!(
-            frame.dimensions() == (width, height),
-            "frames differ in size ({}×{} after {width}×{height})",
-            frame.width(),
-            frame.height()
-        );
-        let rgb = RgbSliceU8::new(frame.as_raw(), (width as usize, height as usize));
-        let yuv = YUVBuffer::from_rgb8_source(rgb);
-        let millis = i as u64 * u64::from(frame_ticks) * 1000 / u64::from(timescale.max(1));
-        let stream = encoder
-            .encode_at(&yuv, openh264::Timestamp::from_millis(millis))
-            .with_context(|| format!("encoding frame {i}"))?;
-        let mut sample = Sample {
-            bytes: Vec::new(),
-            key: stream.frame_type() == FrameType::IDR,
-            ticks: frame_ticks,
-        };
-        for layer in (0..stream.num_layers()).filter_map(|l| stream.layer(l)) {
-            for nal in (0..layer.nal_count()).filter_map(|n| layer.nal_unit(n)) {
-                let nal = strip_start_code(nal);
-                match nal.first().map(|b| b & 0x1f) {
-                    // Parameter sets live once in the track's avcC box, not in the samples.
-                    Some(7) => drop(sps.get_or_insert_with(|| nal.to_vec())),
-                    Some(8) => drop(pps.get_or_insert_with(|| nal.to_vec())),
-                    Some(_) => {
-                        sample.bytes.extend((nal.len() as u32).to_be_bytes());
-                        sample.bytes.extend_from_slice(nal);
-                    }
-                    None => {}
-                }
-            }
-        }
-        match samples.last_mut() {
-            Some(previous) if sample.bytes.is_empty() => previous.ticks += frame_ticks,
-            _ => samples.push(sample),
-        }
-    }
-    let (Some(sps), Some(pps)) = (sps, pps) else {
-        bail!("the H.264 encoder produced no parameter sets");
-    };
-    let avc = mp4::AvcConfig {
-        width: u16::try_from(width)?,
-        height: u16::try_from(height)?,
-        seq_param_set: sps,
-        pic_param_set: pps,
-    };
-    fast_start(&mux(avc, timescale, &samples)?)
+    Ok((encoder, width, height))
 }
 
 /// The NAL unit without its Annex B start code (`00 00 01` or `00 00 00 01`).
