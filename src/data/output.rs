@@ -404,36 +404,43 @@ impl RunFiles {
                 });
             }
             if path.symlink_metadata().is_ok() {
-                let forced = self.force == Some(true);
-                let (allowed, why) = match output.existing {
-                    Existing::Replace => (true, String::new()),
-                    Existing::Force => (forced, String::new()),
-                    Existing::Own(kind) => (
-                        forced || kind.holds(path),
-                        format!(" and is not an earlier {}", kind.name()),
-                    ),
-                    Existing::Earlier(kind) => (
-                        kind.holds(path),
-                        format!(" and is not an earlier {}", kind.name()),
-                    ),
-                };
-                if !allowed {
-                    return Err(OutputError::Exists {
-                        what: what.clone(),
-                        path: path.clone(),
-                        why,
-                        fix: match (self.force, output.existing) {
-                            (Some(_), Existing::Own(_) | Existing::Force) => {
-                                "pass --force to replace it, or choose another path"
-                            }
-                            _ => "delete it, or choose another path",
-                        },
-                    });
-                }
+                self.check_replace(output)?;
             }
             check_output_file(path, what)?;
         }
         Ok(())
+    }
+
+    /// Whether an output may replace the file already at its path.
+    fn check_replace(&self, output: &FileOutput) -> Result<(), OutputError> {
+        let path = &output.path;
+        let forced = self.force == Some(true);
+        let (allowed, why) = match output.existing {
+            Existing::Replace => (true, String::new()),
+            Existing::Force => (forced, String::new()),
+            Existing::Own(kind) => (
+                forced || kind.holds(path),
+                format!(" and is not an earlier {}", kind.name()),
+            ),
+            Existing::Earlier(kind) => (
+                kind.holds(path),
+                format!(" and is not an earlier {}", kind.name()),
+            ),
+        };
+        if allowed {
+            return Ok(());
+        }
+        Err(OutputError::Exists {
+            what: output.what.clone(),
+            path: path.clone(),
+            why,
+            fix: match (self.force, output.existing) {
+                (Some(_), Existing::Own(_) | Existing::Force) => {
+                    "pass --force to replace it, or choose another path"
+                }
+                _ => "delete it, or choose another path",
+            },
+        })
     }
 }
 

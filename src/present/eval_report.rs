@@ -460,25 +460,9 @@ pub(crate) fn summarise(
         .iter()
         .filter(|a| a.reason != PickReason::Pushed)
         .count();
-    let per_object = if task.clears_a_bin() {
-        Vec::new()
-    } else {
-        names
-            .iter()
-            .map(|name| {
-                let mine: Vec<&&AttemptRecord> = all
-                    .iter()
-                    .filter(|a| a.object.as_deref() == Some(name))
-                    .collect();
-                let failures = failure_tally(mine.iter().copied().copied());
-                ObjectSummary {
-                    object: name.clone(),
-                    attempts: mine.len(),
-                    successes: mine.iter().filter(|a| a.success).count(),
-                    failures,
-                }
-            })
-            .collect()
+    let per_object = match task.clears_a_bin() {
+        true => Vec::new(),
+        false => object_summaries(names, &all),
     };
     let spread_of = |f: fn(&BinOutcome) -> usize| {
         task.clears_a_bin().then(|| {
@@ -525,6 +509,26 @@ pub(crate) fn summarise(
         video_encode_s: None,
         vis_dir: None,
     }
+}
+
+/// train/test: each object's attempts, successes and failures.
+fn object_summaries(names: &[String], all: &[&AttemptRecord]) -> Vec<ObjectSummary> {
+    names
+        .iter()
+        .map(|name| {
+            let mine: Vec<&AttemptRecord> = all
+                .iter()
+                .copied()
+                .filter(|a| a.object.as_deref() == Some(name))
+                .collect();
+            ObjectSummary {
+                object: name.clone(),
+                attempts: mine.len(),
+                successes: mine.iter().filter(|a| a.success).count(),
+                failures: failure_tally(mine.iter().copied()),
+            }
+        })
+        .collect()
 }
 
 /// VPG's metrics of each scene in the order first run, then their mean.

@@ -12,6 +12,7 @@ pub mod pick;
 mod place;
 pub mod push;
 pub(crate) mod recording;
+pub use recording::oblique_camera;
 pub(crate) mod robot;
 mod shapes;
 mod stepping;
@@ -452,18 +453,6 @@ pub(crate) fn in_contact(
             .flat_map(|m| m.points.iter())
             .any(|p| p.dist <= gap)
     })
-}
-
-/// The oblique view of the whole workcell that recordings show.
-pub fn oblique_camera() -> Camera {
-    Camera::look_at(
-        Vector::new(1.35, -1.25, 1.25),
-        Vector::new(0.0, 0.0, 0.25),
-        Vector::Z,
-        45.0,
-        320,
-        240,
-    )
 }
 
 /// The fixed scenery (ground, both totes, the pedestal): its drawables, and the environment's

@@ -6,9 +6,21 @@ use std::sync::Arc;
 
 use image::RgbImage;
 
-use super::oblique_camera;
 use crate::vision::camera::Camera;
 use crate::vision::render::{render_rgb_over, Backdrop, Drawable, Shape};
+use rapier3d::math::Vector;
+
+/// The oblique view of the whole workcell that recordings show.
+pub fn oblique_camera() -> Camera {
+    Camera::look_at(
+        Vector::new(1.35, -1.25, 1.25),
+        Vector::new(0.0, 0.0, 0.25),
+        Vector::Z,
+        45.0,
+        320,
+        240,
+    )
+}
 
 /// The scene at one instant: the scenery, shared between snapshots of the same workcell so
 /// that it is rendered once, and everything that moves.

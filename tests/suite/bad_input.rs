@@ -478,12 +478,12 @@ const CASES: &[Case] = &[
     case(
         "--data {data} eval --task train --give-up-after 3",
         2,
-        "--give-up-after applies to --task empty_bin only",
+        "--give-up-after applies to --task empty_bin or scenes only",
     ),
     case(
         "--data {data} eval --task test --max-attempts 3",
         2,
-        "--max-attempts applies to --task empty_bin only",
+        "--max-attempts applies to --task empty_bin or scenes only",
     ),
     case(
         "--data {data} eval --task train --n-past-action 8",

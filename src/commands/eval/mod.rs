@@ -26,13 +26,12 @@ use crate::policy::PolicyKind;
 use crate::present::envelope::write_versioned_report;
 use crate::present::eval_report::Task;
 use crate::present::eval_report::{report_lines, summarise, AttemptRecord, SceneRun};
-use crate::present::video::EpisodeVideo;
+use crate::present::video::episode::EpisodeVideo;
 use crate::sim::WorkcellConfig;
 pub(crate) use config::{
     give_up_by_default, pushes_by_default, single_object_seed, EvalConfig, ATTEMPTS_PER_OBJECT,
     EPISODE_EVERY_STEPS,
 };
-use scene::Setup;
 use sweep::{
     announce_plan, comparable, finished_runs, keep_interrupted, kept_path, resolved_config,
     resume_source,
@@ -96,6 +95,15 @@ struct Plan {
     per_scene: u64,
 }
 
+/// How an empty_bin or scenes run sets its bin up.
+#[derive(Clone, Copy)]
+enum Setup<'a> {
+    /// empty_bin: these objects dropped with the seed.
+    Drop(&'a [ObjectModel]),
+    /// scenes: a scene file placed for the seed.
+    Arrange(&'a ArrangedScene),
+}
+
 /// Runs the command.
 pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
     let start = Instant::now();
@@ -143,14 +151,7 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         (workers, network_threads),
         &mut runs,
     )?;
-    // Resumed runs come first; a report lists its scenes in the order of --seeds (scenes:
-    // those of each scene file together, in the order of --scenes).
-    runs.sort_by_key(|r| {
-        let scene = scenes
-            .iter()
-            .position(|s| Some(&s.scene.name) == r.scene.as_ref());
-        (scene, seeds.iter().position(|&s| s == r.seed))
-    });
+    in_report_order(&mut runs, &seeds, &scenes);
     evaluation.bar.finish_and_clear();
     let interrupted =
         interrupt::requested().filter(|_| runs.len() < seeds.len() * scenes.len().max(1));
@@ -180,6 +181,17 @@ pub(crate) fn run(context: &Context, config: EvalConfig) -> anyhow::Result<()> {
         video_encode_s,
     };
     finish(context, &config, &names, runs, ran, &evaluation.vis_dir)
+}
+
+/// Resumed runs come first; a report lists its scenes in the order of --seeds (scenes: those of
+/// each scene file together, in the order of --scenes).
+fn in_report_order(runs: &mut [SceneRun], seeds: &[u64], scenes: &[ArrangedScene]) {
+    runs.sort_by_key(|r| {
+        let scene = scenes
+            .iter()
+            .position(|s| Some(&s.scene.name) == r.scene.as_ref());
+        (scene, seeds.iter().position(|&s| s == r.seed))
+    });
 }
 
 /// How a finished evaluation ran, beside its scenes.

@@ -5,13 +5,12 @@ use std::collections::BTreeMap;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::{single_object_seed, Evaluation, Worker, EPISODE_EVERY_STEPS};
+use super::{single_object_seed, Evaluation, Setup, Worker, EPISODE_EVERY_STEPS};
 use crate::assets::objects::ObjectModel;
-use crate::commands::arranged::ArrangedScene;
 use crate::commands::attempt::{objects_in_bin, Look};
 use crate::data::atomic::save_image_atomic;
 use crate::grasp::draw::draw_grasp;
-use crate::grasp::world::world_grasp;
+use crate::grasp::world::{world_grasp, WorldPush};
 use crate::interrupt;
 use crate::named::Named;
 use crate::policy::heights::HeightMap;
@@ -197,16 +196,9 @@ impl Evaluation<'_> {
         let mut push_record = None;
         let outcome = match (&decision.grasp, push) {
             (_, Some(push)) => {
-                let before = positions(cell);
-                let pushed = cell.push(&push);
-                let record = PushRecord {
-                    start: [push.start.x, push.start.y],
-                    end: [push.end.x, push.end.y],
-                    moved: moved_by_push(cell, &before),
-                };
-                let detail = format!("{}; {}", pushed.detail, record.describe());
+                let (outcome, record) = push_and_record(cell, &push);
                 push_record = Some(record);
-                PickOutcome::failure(PickReason::Pushed, detail)
+                outcome
             }
             (Ok(g), None) => cell.pick(&world_grasp(camera, frame, *g)),
             (Err(why), None) => PickOutcome::failure(PickReason::Ungraspable, why.to_string()),
@@ -263,18 +255,22 @@ fn moved_line(record: &AttemptRecord, moved: usize, total: usize) -> String {
     line
 }
 
-/// How an empty_bin or scenes run sets its bin up.
-#[derive(Clone, Copy)]
-pub(super) enum Setup<'a> {
-    /// empty_bin: these objects dropped with the seed.
-    Drop(&'a [ObjectModel]),
-    /// scenes: a scene file placed for the seed.
-    Arrange(&'a ArrangedScene),
-}
-
 /// An object counts as moved by a push when its centre shifted more than this (m): less is
 /// the settling of a pile that the stroke only brushed.
 const PUSH_MOVED: f32 = 0.005;
+
+/// Executes a push, and records where it went and what it moved.
+fn push_and_record(cell: &mut Workcell, push: &WorldPush) -> (PickOutcome, PushRecord) {
+    let before = positions(cell);
+    let pushed = cell.push(push);
+    let record = PushRecord {
+        start: [push.start.x, push.start.y],
+        end: [push.end.x, push.end.y],
+        moved: moved_by_push(cell, &before),
+    };
+    let detail = format!("{}; {}", pushed.detail, record.describe());
+    (PickOutcome::failure(PickReason::Pushed, detail), record)
+}
 
 /// Every object's centre now.
 fn positions(cell: &Workcell) -> Vec<Vector> {

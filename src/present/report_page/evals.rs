@@ -106,33 +106,7 @@ fn comparison(task: Task, entries: &[&Entry], files: &mut Files) -> anyhow::Resu
             100.0 * s.wilson_low,
             100.0 * s.wilson_high
         );
-        if bin {
-            let spread = |s: &Option<Spread>| {
-                s.as_ref().map_or("–".into(), |s| {
-                    format!("{:.1} ± {:.1} ({}–{})", s.mean, s.std, s.min, s.max)
-                })
-            };
-            let _ = write!(
-                html,
-                "<td class=\"num\">{}</td><td class=\"num\">{}</td>",
-                spread(&r.moved),
-                r.lost
-                    .as_ref()
-                    .map_or("–".into(), |l| format!("{:.1}", l.mean))
-            );
-        }
-        if task == Task::Scenes {
-            let percent =
-                |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.1} %", 100.0 * v));
-            let mean = r.cases.last();
-            let _ = write!(
-                html,
-                "<td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>",
-                percent(mean.map(|m| m.completion)),
-                percent(mean.and_then(|m| m.grasp_success)),
-                percent(mean.and_then(|m| m.action_efficiency))
-            );
-        }
+        html.push_str(&clearing_cells(task, r));
         let interrupted = if r.interrupted { " (interrupted)" } else { "" };
         let _ = writeln!(
             html,
@@ -166,6 +140,38 @@ fn comparison(task: Task, entries: &[&Entry], files: &mut Files) -> anyhow::Resu
         ));
     }
     Ok(html)
+}
+
+/// empty_bin and scenes: the objects moved and lost; scenes: VPG's three means.
+fn clearing_cells(task: Task, r: &EvalResults) -> String {
+    let mut html = String::new();
+    if task.clears_a_bin() {
+        let spread = |s: &Option<Spread>| {
+            s.as_ref().map_or("–".into(), |s| {
+                format!("{:.1} ± {:.1} ({}–{})", s.mean, s.std, s.min, s.max)
+            })
+        };
+        let _ = write!(
+            html,
+            "<td class=\"num\">{}</td><td class=\"num\">{}</td>",
+            spread(&r.moved),
+            r.lost
+                .as_ref()
+                .map_or("–".into(), |l| format!("{:.1}", l.mean))
+        );
+    }
+    if task == Task::Scenes {
+        let percent = |v: Option<f64>| v.map_or("–".into(), |v| format!("{:.1} %", 100.0 * v));
+        let mean = r.cases.last();
+        let _ = write!(
+            html,
+            "<td class=\"num\">{}</td><td class=\"num\">{}</td><td class=\"num\">{}</td>",
+            percent(mean.map(|m| m.completion)),
+            percent(mean.and_then(|m| m.grasp_success)),
+            percent(mean.and_then(|m| m.action_efficiency))
+        );
+    }
+    html
 }
 
 /// One report's own table, its pictures (capped) and its video (unless the first screen shows

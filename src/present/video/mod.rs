@@ -1,7 +1,7 @@
 //! Episode videos of the oblique view, written atomically: H.264 in MP4 (small, plays in every
 //! browser) or an animated GIF, chosen by the file's extension.
 
-mod episode;
+pub(crate) mod episode;
 mod mp4;
 
 use std::path::Path;
@@ -10,7 +10,6 @@ use anyhow::Context;
 
 use crate::data::atomic::write_atomic;
 use crate::sim::PHYSICS_HZ;
-pub(crate) use episode::EpisodeVideo;
 
 /// What a `--record` file's extension asks for.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
