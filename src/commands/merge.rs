@@ -12,7 +12,8 @@ use crate::data::shard::{self, Shard};
 use crate::data::trials::{Manifest, TrialStore, MANIFEST_FILE};
 use crate::named::counted;
 use crate::present::envelope::{write_report, write_versioned_report};
-use crate::present::eval_report::{report_lines, summarise, EvalReport, SceneRun};
+use crate::present::eval_lines::report_lines;
+use crate::present::eval_report::{summarise, EvalReport, SceneRun};
 
 /// What `graspmap merge` runs.
 #[derive(Debug, Clone)]

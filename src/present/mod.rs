@@ -3,6 +3,7 @@
 //! `--json` report, and the evaluation report's schema, which `eval` writes and `report` reads.
 
 pub(crate) mod envelope;
+pub(crate) mod eval_lines;
 pub(crate) mod eval_report;
 pub(crate) mod improve_summary;
 pub(crate) mod kept_reports;

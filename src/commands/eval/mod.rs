@@ -24,8 +24,9 @@ use crate::policy::suppression::SuppressionConfig;
 use crate::policy::Policy;
 use crate::policy::PolicyKind;
 use crate::present::envelope::write_versioned_report;
+use crate::present::eval_lines::report_lines;
 use crate::present::eval_report::Task;
-use crate::present::eval_report::{report_lines, summarise, AttemptRecord, SceneRun};
+use crate::present::eval_report::{summarise, AttemptRecord, SceneRun};
 use crate::present::video::episode::EpisodeVideo;
 use crate::sim::WorkcellConfig;
 pub(crate) use config::{
