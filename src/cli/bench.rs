@@ -11,6 +11,9 @@ use super::values::PrecisionChoice;
 pub(crate) enum BenchCommand {
     /// Training-step throughput and 8-rotation inference latency, Rust and Python alternating.
     Train(BenchTrainArgs),
+    /// `--precision auto`'s measurement, taken afresh: fp32 and bf16 on a training step and an
+    /// 8-rotation inference under this process's ISA cap, the choice, and where it is kept.
+    Precision,
 }
 
 /// `graspmap bench train`.

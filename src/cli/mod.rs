@@ -29,6 +29,7 @@ use crate::commands::bench::{BenchConfig, PeerPython};
 use crate::commands::scene::{SceneConfig, SceneSource};
 use crate::commands::Context;
 use crate::data::input::InputKind;
+use crate::model::autotune::Workload;
 use crate::model::config::TrainConfig;
 use crate::sim::WorkcellConfig;
 use values::{named, non_negative_up_to, parse_label_address, parse_pixel, positive_up_to};
@@ -366,6 +367,7 @@ pub fn run() -> anyhow::Result<()> {
     let given = Given::of(&matches);
     given::refuse_unread(&given, cli.command.name(), cli.command.unread_globals())?;
     let context = cli.global.context(cli.command.name(), scoped)?;
+    crate::model::autotune::set_quiet(context.quiet);
     dispatch(&context, cli.command, &given)
 }
 
@@ -472,6 +474,10 @@ fn dispatch(context: &Context, command: Command, given: &Given) -> anyhow::Resul
             commands::report::run(context, config)
         }
         Command::Bench(BenchCommand::Train(args)) => bench_train(context, args),
+        Command::Bench(BenchCommand::Precision) => {
+            outputs::base(context, None).check()?;
+            commands::bench::precision(context)
+        }
     }
 }
 
@@ -503,7 +509,7 @@ fn bench_train(context: &Context, args: BenchTrainArgs) -> anyhow::Result<()> {
         BenchConfig {
             steps: args.steps,
             rounds: args.rounds,
-            precision: args.precision.resolve(),
+            precision: args.precision.resolve(Workload::Train),
             peer: match (args.no_peer, args.python) {
                 (true, _) => None,
                 (false, Some(path)) => Some(PeerPython::Given(path)),

@@ -7,6 +7,7 @@ use anyhow::{bail, Context as _};
 
 use super::given::{refuse_inapplicable, Given};
 use super::scoped::Resolved;
+use super::values::PrecisionChoice;
 use super::{
     CollectArgs, EvalArgs, GlobalArgs, GraspArgs, ImproveArgs, LabelArgs, PredictArgs, ReportArgs,
     TrainArgs, TrialArgs,
@@ -24,6 +25,7 @@ use crate::commands::{Context, RunBy};
 use crate::data::output::identity;
 use crate::data::shard::Shard;
 use crate::grasp::PixelGrasp;
+use crate::model::autotune::Workload;
 use crate::model::config::TrainConfig;
 use crate::named::Named;
 use crate::policy::model::ModelPolicyConfig;
@@ -170,7 +172,8 @@ impl EvalArgs {
             task: self.task,
             policy: self.policy,
             checkpoint: checkpoint_path(data, self.checkpoint),
-            precision: self.precision.resolve(),
+            precision: (self.precision)
+                .resolve_for(Workload::Infer, self.policy == PolicyKind::Model),
             seeds,
             scenes: self.scenes,
             suppression: SuppressionConfig {
@@ -208,7 +211,10 @@ impl TrialArgs {
             temperature: self.temperature,
             oracle_share: f64::from(self.oracle_share),
             checkpoint: checkpoint_path(data, self.checkpoint),
-            precision: self.precision.resolve(),
+            precision: (self.precision).resolve_for(
+                Workload::Infer,
+                matches!(self.policy, CollectPolicy::Model | CollectPolicy::Mix),
+            ),
             model: ModelPolicyConfig::default(),
             suppression: SuppressionConfig {
                 remember: self.n_past_action,
@@ -267,7 +273,7 @@ impl ImproveArgs {
         self.trials.refuse_inapplicable(given, &[])?;
         let out = self.out.unwrap_or_else(|| data.join("improve"));
         let start = checkpoint_path(data, self.trials.checkpoint.clone());
-        let precision = self.trials.precision.resolve();
+        let precision = self.trials.precision.resolve(Workload::Train);
         let collect = self
             .trials
             .collect_config(data, out.join("trials"), self.seed, self.scenes);
@@ -307,7 +313,7 @@ impl PredictArgs {
             image: self.image,
             depth: self.depth,
             out,
-            precision: self.precision.resolve(),
+            precision: self.precision.resolve(Workload::Infer),
         }
     }
 }
@@ -409,7 +415,7 @@ impl TrainArgs {
                 batch_size: self.batch_size as usize,
                 lr: self.lr,
                 seed: self.seed,
-                precision: self.precision.resolve(),
+                precision: self.precision.resolve(Workload::Train),
                 input: self.input,
                 crop: self.crop,
                 trial_weight: self.trial_weight,
@@ -422,6 +428,7 @@ impl TrainArgs {
             labels: (!self.no_labels).then(|| data.join("labels")),
             trials: self.trials,
             start_from: self.start_from,
+            precision_auto: self.precision == PrecisionChoice::Auto,
             run_by: RunBy::Own,
         })
     }

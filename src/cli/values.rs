@@ -1,6 +1,7 @@
 //! Parsing one flag's value: names of options, seed lists, pixels, label addresses and numbers
 //! in their documented ranges, each refusing a bad value with a message that names it.
 
+use crate::model::autotune::{self, Workload};
 use crate::model::unet::Precision;
 use anyhow::{bail, Context as _};
 use clap::builder::{PossibleValue, PossibleValuesParser, TypedValueParser};
@@ -134,7 +135,8 @@ pub(crate) fn parse_pixel(text: &str) -> anyhow::Result<(u32, u32)> {
 /// `--precision` values.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub(crate) enum PrecisionChoice {
-    /// bf16 where the CPU has native bf16 instructions, else fp32.
+    /// The faster on this machine, as timed once per CPU and ISA cap and kept in
+    /// ~/.cache/graspmap/precision.json (`graspmap bench precision` shows the figures).
     Auto,
     /// float32 throughout.
     Fp32,
@@ -143,12 +145,21 @@ pub(crate) enum PrecisionChoice {
 }
 
 impl PrecisionChoice {
-    /// The precision to use on this machine.
-    pub(crate) fn resolve(self) -> Precision {
+    /// The precision to use on this machine for `workload`.
+    pub(crate) fn resolve(self, workload: Workload) -> Precision {
         match self {
-            PrecisionChoice::Auto => Precision::fastest_supported(),
+            PrecisionChoice::Auto => autotune::auto(workload),
             PrecisionChoice::Fp32 => Precision::Fp32,
             PrecisionChoice::Bf16 => Precision::Bf16,
+        }
+    }
+
+    /// As [`Self::resolve`] where the run uses the network; where it does not (the oracle and
+    /// random policies), auto is fp32 without timing anything.
+    pub(crate) fn resolve_for(self, workload: Workload, uses_network: bool) -> Precision {
+        match (self, uses_network) {
+            (PrecisionChoice::Auto, false) => Precision::Fp32,
+            _ => self.resolve(workload),
         }
     }
 }

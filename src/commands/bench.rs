@@ -1,4 +1,5 @@
-//! `graspmap bench train`: training-step throughput and 8-rotation inference latency, side by side with the same network in Python PyTorch.
+//! `graspmap bench`: training-step throughput and 8-rotation inference latency side by side with
+//! the same network in Python PyTorch (`train`), and `--precision auto`'s measurement (`precision`).
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -9,6 +10,7 @@ use anyhow::{bail, Context as _};
 use tch::{nn, Device, Kind, Tensor};
 
 use super::Context;
+use crate::model::autotune;
 use crate::model::train::{loss, Adam};
 use crate::model::unet::{MiniUNet, Precision};
 use crate::named::Named;
@@ -228,6 +230,53 @@ pub(crate) fn run(context: &Context, args: BenchConfig) -> anyhow::Result<()> {
             "peer": args.peer.is_some(),
         });
         write_report(json, "bench", 0, &resolved, &results)?;
+    }
+    Ok(())
+}
+
+/// `graspmap bench precision`: times fp32 and bf16 afresh under this process's ISA cap, keeps
+/// the result as `--precision auto`'s choice for this machine, and shows both.
+pub(crate) fn precision(context: &Context) -> anyhow::Result<()> {
+    crate::model::use_threads(context.threads);
+    let (measured, kept) = autotune::remeasure()?;
+    let key = &measured.machine;
+    context.say(&format!(
+        "{}, {}, {}, {} threads",
+        key.cpu_model,
+        key.onednn_max_cpu_isa
+            .as_ref()
+            .map_or("no ONEDNN_MAX_CPU_ISA cap".to_owned(), |c| format!(
+                "ONEDNN_MAX_CPU_ISA={c}"
+            )),
+        key.aten_cpu_capability
+            .as_ref()
+            .map_or("no ATEN_CPU_CAPABILITY".to_owned(), |c| format!(
+                "ATEN_CPU_CAPABILITY={c}"
+            )),
+        measured.threads
+    ));
+    context.say(&format!(
+        "{:<6} {:>14} {:>22}",
+        "", "train ms/step", "infer 8 rotations ms"
+    ));
+    for (name, t) in [("fp32", &measured.fp32), ("bf16", &measured.bf16)] {
+        context.say(&format!(
+            "{name:<6} {:>14.1} {:>22.1}",
+            t.train_step_ms, t.infer_ms
+        ));
+    }
+    context.say(&format!(
+        "auto: {} for training, {} for inference; {}",
+        measured.train.name(),
+        measured.infer.name(),
+        match &kept {
+            Some(path) => format!("kept in {}", path.display()),
+            None => "not kept (no HOME or XDG_CACHE_HOME)".to_owned(),
+        }
+    ));
+    if let Some(json) = &context.json {
+        let resolved = serde_json::json!({ "global": context, "cache": kept });
+        write_report(json, "bench", 0, &resolved, &measured)?;
     }
     Ok(())
 }

@@ -215,6 +215,7 @@ fn retrain(
         labels: Some(config.labels.clone()),
         trials: stores.to_vec(),
         start_from: Some(current.to_path_buf()),
+        precision_auto: false,
         run_by: RunBy::Improve,
     };
     super::train::run(context, train)?;

@@ -94,13 +94,7 @@ impl AffordanceModel {
         let values = tch::no_grad(|| {
             let batch =
                 Tensor::from_slice(&input).view([BINS as i64, channels as i64, h as i64, w as i64]);
-            // oneDNN's fp32 convolutions ran faster in channels_last on an AVX2-only CPU (the
-            // measurement diary, `git show 2c24231:docs/history.md`); only for inference, since
-            // its backward pass is slower there.
-            let batch = match self.precision {
-                Precision::Fp32 => crate::model::unet::channels_last(&batch),
-                Precision::Bf16 => batch,
-            };
+            let batch = network_layout(&batch, self.precision);
             let scores = self
                 .net
                 .forward_with(&batch, self.precision)
@@ -110,6 +104,17 @@ impl AffordanceModel {
             Vec::<f32>::try_from(scores).expect("a float tensor converts to Vec<f32>")
         });
         Ok(AffordanceMaps::new(w, values))
+    }
+}
+
+/// The 8-rotation batch in the layout inference runs it in. oneDNN's fp32 convolutions ran
+/// faster in channels_last on an AVX2-only CPU (the measurement diary, `git show
+/// 2c24231:docs/history.md`); only for inference, since its backward pass is slower there.
+/// bf16's forward pass converts its input itself.
+pub(crate) fn network_layout(batch: &Tensor, precision: Precision) -> Tensor {
+    match precision {
+        Precision::Fp32 => crate::model::unet::channels_last(batch),
+        Precision::Bf16 => batch.shallow_clone(),
     }
 }
 

@@ -3,6 +3,7 @@
 //! This layer owns tch and uses the pure core (`grasp`, `data`); it never sees the simulator.
 //! docs/learning.md describes the network and its training.
 
+pub(crate) mod autotune;
 pub mod checkpoint;
 pub mod config;
 pub(crate) mod inference;

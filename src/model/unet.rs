@@ -121,18 +121,6 @@ impl MiniUNet {
     }
 }
 
-impl Precision {
-    /// bf16 where the CPU computes it natively (AVX-512 BF16, which AMX CPUs also have);
-    /// elsewhere libtorch would emulate it, slower than fp32.
-    pub(crate) fn fastest_supported() -> Self {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512bf16") {
-            return Precision::Bf16;
-        }
-        Precision::Fp32
-    }
-}
-
 /// Channels-last layout: tch has no memory-format API, so permute, copy, permute back.
 pub(crate) fn channels_last(x: &Tensor) -> Tensor {
     x.permute([0, 2, 3, 1]).contiguous().permute([0, 3, 1, 2])

@@ -1,7 +1,7 @@
 //! The integration tests, built into one binary so that libtorch and rapier are linked once.
 //!
 //! Each module covers one area end to end: the CLI's outputs and errors, depth input and clutter
-//! labels, evaluation, the mesh importer, labelling, libtorch itself, physics grasps, scene
+//! labels, evaluation, the mesh importer, labelling, libtorch itself, physics grasps, `--precision auto`'s measurement, scene
 //! files and VPG's test cases, training, the run report and videos, and the web pages (over HTTP and in a browser). `layers` reads
 //! src/ itself: its imports against the layer table in src/lib.rs.
 
@@ -19,6 +19,7 @@ mod layers;
 mod libtorch;
 mod physics;
 mod place;
+mod precision;
 mod report;
 mod scenes;
 mod slurm;

@@ -43,6 +43,9 @@ pub(crate) struct TrainOptions {
     pub(crate) labels: Option<PathBuf>,
     /// Trial stores to train on as well (`--trials`).
     pub(crate) trials: Vec<PathBuf>,
+    /// `--precision auto`: a run that continues the folder's model keeps the precision it was
+    /// trained in, whatever this machine's measurement says now.
+    pub(crate) precision_auto: bool,
     /// A checkpoint whose weights the run starts from, instead of fresh ones.
     pub(crate) start_from: Option<PathBuf>,
     /// Who runs it, for the advice of its errors.
@@ -73,7 +76,12 @@ struct Run {
 }
 
 /// Runs the command.
-pub(crate) fn run(context: &Context, options: TrainOptions) -> anyhow::Result<()> {
+pub(crate) fn run(context: &Context, mut options: TrainOptions) -> anyhow::Result<()> {
+    if options.precision_auto && !options.force {
+        if let Ok((_, meta)) = read_checkpoint(&options.out_dir, "last") {
+            options.config.precision = meta.config.precision;
+        }
+    }
     let config = options.config.clone();
     crate::model::use_threads(context.threads);
     tch::manual_seed(config.seed as i64);
