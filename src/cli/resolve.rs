@@ -290,6 +290,7 @@ impl ImproveArgs {
                 crop: self.crop,
                 trial_weight: self.trial_weight,
                 lr: self.lr,
+                epoch_samples: self.epoch_samples,
                 ..TrainConfig::default()
             },
             eval_seeds: self.eval_seeds.map(|s| s.0),

@@ -93,6 +93,10 @@ pub(crate) struct MergeArgs {
     pub(crate) force: bool,
 }
 
+/// Improve's default training images per epoch: 40 steps of 8, so that the loop's time on 2
+/// cores without AMX stays within a quarter of an hour (BENCHMARKS.md, "Learning from trials").
+const EPOCH_SAMPLES: u32 = 320;
+
 /// `graspmap improve`.
 #[derive(Debug, Args)]
 pub(crate) struct ImproveArgs {
@@ -105,6 +109,11 @@ pub(crate) struct ImproveArgs {
     /// Epochs of retraining per round, starting from the round's model.
     #[arg(long, default_value_t = 10, value_parser = clap::value_parser!(u32).range(1..))]
     pub(crate) epochs: u32,
+    /// Training images per epoch of a round's retraining: every label, then trials drawn afresh
+    /// each epoch from every store so far, so that each round costs the same (0: every image,
+    /// a cost that grows with each round).
+    #[arg(long, value_name = "N", default_value_t = EPOCH_SAMPLES)]
+    pub(crate) epoch_samples: u32,
     /// Seed of the rounds' collection and training.
     #[arg(long, default_value_t = 0)]
     pub(crate) seed: u64,

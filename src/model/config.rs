@@ -47,6 +47,12 @@ pub struct TrainConfig {
     /// σ of a trial's weighted window in pixels; 0 weights the executed pixel alone.
     #[serde(default, skip_serializing_if = "is_zero_f32")]
     pub(crate) trial_sigma_px: f32,
+    /// At most this many training images per epoch (improve's `--epoch-samples`), so that an
+    /// epoch costs the same however many trial stores there are: every label, then trials
+    /// drawn afresh each epoch; and at most a ninth of it validates (the same images every
+    /// epoch). 0: every image, as `train` does.
+    #[serde(default, skip_serializing_if = "is_zero")]
+    pub(crate) epoch_samples: u32,
 }
 
 fn is_zero(value: &u32) -> bool {
@@ -66,6 +72,15 @@ fn is_default_trial_weight(value: &f32) -> bool {
 }
 
 impl TrainConfig {
+    /// The validation images an epoch scores: the first of `val_indices` (a random split)
+    /// under an epoch budget, else all.
+    pub(crate) fn validated<'a>(&self, val_indices: &'a [usize]) -> &'a [usize] {
+        match self.epoch_samples {
+            0 => val_indices,
+            budget => &val_indices[..val_indices.len().min((budget as usize / 9).max(1))],
+        }
+    }
+
     /// How its trial samples are weighted.
     pub(crate) fn trial_weighting(&self) -> TrialWeighting {
         TrialWeighting {
@@ -89,6 +104,7 @@ impl Default for TrainConfig {
             crop: DEFAULT_CROP,
             trial_weight: default_trial_weight(),
             trial_sigma_px: 0.0,
+            epoch_samples: 0,
         }
     }
 }

@@ -16,7 +16,7 @@ use tch::{Kind, Reduction, Tensor};
 
 use super::config::TrainConfig;
 use crate::data::augment::AugmentConfig;
-use crate::data::dataset::{crop_sample, training_sample, LabelledImage, Sample};
+use crate::data::dataset::{crop_sample, training_sample, LabelledImage, Sample, Supervision};
 use crate::model::unet::{MiniUNet, Precision};
 
 /// Adam (β 0.9/0.999, ε 1e-8, no weight decay), PyTorch's update rule.
@@ -242,6 +242,7 @@ pub(crate) fn train_epoch(
     let mut rng = epoch_rng(config.seed, epoch);
     let mut order = data.indices.to_vec();
     order.shuffle(&mut rng);
+    within_budget(&mut order, data.images, config.epoch_samples as usize);
     let mut total = 0.0;
     let mut count = 0usize;
     let weighting = config.trial_weighting();
@@ -267,6 +268,25 @@ pub(crate) fn train_epoch(
         }
     }
     Some(total / count.max(1) as f64)
+}
+
+/// Keeps at most `budget` of the shuffled `order` (0: all): every label, then the trials that
+/// come first in it, in their shuffled order.
+fn within_budget(order: &mut Vec<usize>, images: &[LabelledImage], budget: usize) {
+    if budget == 0 || order.len() <= budget {
+        return;
+    }
+    let is_label = |i: usize| images[i].supervision == Supervision::Label;
+    let labels = order.iter().filter(|&&i| is_label(i)).count();
+    let mut trials_left = budget.saturating_sub(labels);
+    order.retain(|&i| {
+        if is_label(i) {
+            return true;
+        }
+        let keep = trials_left > 0;
+        trials_left = trials_left.saturating_sub(1);
+        keep
+    });
 }
 
 /// Mean validation loss over unaugmented samples.
@@ -369,6 +389,23 @@ mod tests {
             grasp,
             supervision: Supervision::Trial { success },
         }
+    }
+
+    #[test]
+    fn an_epoch_budget_keeps_every_label_and_fills_with_trials_in_shuffled_order() {
+        let mut images: Vec<LabelledImage> = (0..10).map(|_| trial_item(true, 0.0)).collect();
+        for i in [2, 7] {
+            images[i].supervision = Supervision::Label;
+        }
+        let mut order = vec![9, 2, 4, 0, 7, 1, 3, 8, 6, 5];
+        within_budget(&mut order, &images, 5);
+        assert_eq!(order, [9, 2, 4, 0, 7]);
+        let mut order = vec![1, 3, 8, 6, 5, 9, 2, 4, 0, 7];
+        within_budget(&mut order, &images, 5);
+        assert_eq!(order, [1, 3, 8, 2, 7], "labels last in the order still stay");
+        let mut all = vec![3, 1, 2];
+        within_budget(&mut all, &images, 0);
+        assert_eq!(all, [3, 1, 2], "0 keeps everything");
     }
 
     #[test]

@@ -370,6 +370,7 @@ fn resumable(
         || saved.crop != config.crop
         || saved.trial_weight != config.trial_weight
         || saved.trial_sigma_px != config.trial_sigma_px
+        || saved.epoch_samples != config.epoch_samples
     {
         return Err(format!(
             "was trained with --seed {} --batch-size {} --lr {} --precision {} --input {} --crop {} --trial-weight {} --trial-sigma {}",
@@ -539,7 +540,7 @@ impl Run {
             &self.net,
             Subset {
                 images,
-                indices: &meta.val_indices,
+                indices: config.validated(&meta.val_indices),
             },
             config,
         );
