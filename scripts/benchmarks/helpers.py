@@ -143,19 +143,23 @@ def machine():
 
 
 def settings(out, quick, *keys):
-    """OUT/machine.txt and OUT/settings.json; prints 1 when the CPU has native bf16, else 0."""
+    """OUT/machine.txt and OUT/settings.json (the machine with its ISA cap); prints 1 when the CPU
+    has native bf16, else 0."""
     model, flags, named, bf16 = machine()
     git = lambda *args: subprocess.run(["git", *args], capture_output=True, text=True).stdout.strip()
     changed = subprocess.run(["git", "diff", "--quiet", "HEAD", "--", "src", "benches", "build.rs", "Cargo.toml",
                               "Cargo.lock"]).returncode != 0
     dirty = " (with uncommitted changes to the code)" if changed else ""
+    # oneDNN's and ATen's ISA caps: each table's machine column says which one it ran under.
+    caps = [f"{k}={os.environ[k]}" for k in ("ONEDNN_MAX_CPU_ISA", "ATEN_CPU_CAPABILITY") if os.environ.get(k)]
+    cap = f", under {' '.join(caps)}" if caps else ", no ISA cap"
     with open(f"{out}/machine.txt", "w") as f:
         f.write(f"model name: {model}\ncores: {len(os.sched_getaffinity(0))}\nrelevant flags: {named}\n"
-                f"flags: {' '.join(sorted(flags))}\ncommit: {git('rev-parse', 'HEAD')}{dirty}\n"
+                f"flags: {' '.join(sorted(flags))}\nisa cap: {cap[2:]}\ncommit: {git('rev-parse', 'HEAD')}{dirty}\n"
                 f"date: {time.strftime('%Y-%m-%dT%H:%M:%SZ', time.gmtime())}\n"
                 f"mode: {'quick' if quick == '1' else 'full'}\n")
     write(f"{out}/settings.json", {
-        "machine": f"{model or 'unknown CPU'} ({named}), {len(os.sched_getaffinity(0))} cores",
+        "machine": f"{model or 'unknown CPU'} ({named}), {len(os.sched_getaffinity(0))} cores{cap}",
         "commit": git("rev-parse", "--short", "HEAD") + dirty, "quick": quick == "1",
         "settings": {k: os.environ.get(k, "") for k in keys}})
     print(int(bf16))
