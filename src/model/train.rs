@@ -402,7 +402,11 @@ mod tests {
         assert_eq!(order, [9, 2, 4, 0, 7]);
         let mut order = vec![1, 3, 8, 6, 5, 9, 2, 4, 0, 7];
         within_budget(&mut order, &images, 5);
-        assert_eq!(order, [1, 3, 8, 2, 7], "labels last in the order still stay");
+        assert_eq!(
+            order,
+            [1, 3, 8, 2, 7],
+            "labels last in the order still stay"
+        );
         let mut all = vec![3, 1, 2];
         within_budget(&mut all, &images, 0);
         assert_eq!(all, [3, 1, 2], "0 keeps everything");
