@@ -283,8 +283,16 @@ pub(crate) fn precision(context: &Context) -> anyhow::Result<()> {
         ));
     }
     context.say(&format!(
-        "auto: {} for training, {} for inference; {}",
+        "{:<6} {:>14.1} {:>22}",
+        "fp32, channels_last", measured.fp32_train_channels_last_ms, "–"
+    ));
+    context.say(&format!(
+        "auto: {} for training{}, {} for inference; {}",
         measured.train.name(),
+        match measured.fp32_train_channels_last {
+            true => " (fp32 in channels_last)",
+            false => "",
+        },
         measured.infer.name(),
         match &kept {
             Some(path) => format!("kept in {}", path.display()),

@@ -21,16 +21,17 @@ use crate::grasp::{BINS, IMAGE_SIZE};
 use crate::named::Named;
 
 /// The cache's file format.
-const SCHEMA: &str = "graspmap.precision/1";
+const SCHEMA: &str = "graspmap.precision/2";
 /// Timed repetitions of each workload and precision, after one warm-up.
 const REPS: usize = 3;
 /// A precision whose warm-up took this many times the other's median is timed once more, not
 /// [`REPS`] times: bf16 emulated under an AVX2 cap is ten times slower, and timing it fully
 /// would cost half a minute to learn nothing.
 const HOPELESS: f64 = 3.0;
-/// bf16 is chosen only when it is this much faster: its rounding is the cost, and timings of
-/// near-equal precisions would otherwise pick one or the other from run to run.
-const BF16_MARGIN: f64 = 0.95;
+/// bf16, or fp32 training in channels_last, is chosen only when it is this much faster: each
+/// changes the bits of the results, and timings of near-equal choices would otherwise pick one
+/// or the other from machine to machine of the same kind.
+const MARGIN: f64 = 0.95;
 
 /// Whether the announcement of a measurement is printed (`--quiet` turns it off).
 static ANNOUNCE: AtomicBool = AtomicBool::new(true);
@@ -144,6 +145,11 @@ pub(crate) struct Measured {
     pub(crate) train: Precision,
     /// The precision `--precision auto` predicts in.
     pub(crate) infer: Precision,
+    /// fp32's training step with its batches in channels_last layout.
+    pub(crate) fp32_train_channels_last_ms: f64,
+    /// Whether fp32 training runs its batches in channels_last (oneDNN then keeps the whole
+    /// step in that layout): faster with AVX-512 on one machine, slower on an AVX2-only one.
+    pub(crate) fp32_train_channels_last: bool,
 }
 
 impl Measured {
@@ -156,9 +162,9 @@ impl Measured {
     }
 }
 
-/// The faster of the two for `workload`, bf16 only when it is faster by [`BF16_MARGIN`].
+/// The faster of the two for `workload`, bf16 only when it is faster by [`MARGIN`].
 pub(crate) fn faster(fp32: &Timing, bf16: &Timing, workload: Workload) -> Precision {
-    match bf16.of(workload) < BF16_MARGIN * fp32.of(workload) {
+    match bf16.of(workload) < MARGIN * fp32.of(workload) {
         true => Precision::Bf16,
         false => Precision::Fp32,
     }
@@ -214,28 +220,38 @@ fn cached_in(path: &Path) -> Option<Measured> {
         .find(|m| m.machine == machine)
 }
 
-/// `--precision auto` for `workload`: the cached choice, or one measured now and cached. One
-/// process measures at a time; another waits for it and reads its result.
+/// `--precision auto` for `workload`: the cached choice, or one measured now and cached.
 pub(crate) fn auto(workload: Workload) -> Precision {
     auto_in(cache_path(), workload)
 }
 
+/// Whether fp32 training should run in channels_last here, by the same measurement.
+pub(crate) fn fp32_trains_channels_last() -> bool {
+    measured_in(cache_path()).fp32_train_channels_last
+}
+
 fn auto_in(path: Option<PathBuf>, workload: Workload) -> Precision {
+    measured_in(path).choice(workload)
+}
+
+/// The measurement `path` keeps for this machine, or one taken now and kept there. One
+/// process measures at a time; another waits for it and reads its result.
+fn measured_in(path: Option<PathBuf>) -> Measured {
     let Some(path) = path else {
-        return measure_and_announce(None).choice(workload);
+        return measure_and_announce(None);
     };
     if let Some(measured) = cached_in(&path) {
-        return measured.choice(workload);
+        return measured;
     }
     let lock = lock_cache(&path);
     if let Some(measured) = lock.is_some().then(|| cached_in(&path)).flatten() {
-        return measured.choice(workload);
+        return measured;
     }
     let measured = measure_and_announce(Some(&path));
     if let Err(e) = write_cache(&path, &measured) {
         eprintln!("warning: --precision auto could not keep its measurement ({e:#}); the next run measures again");
     }
-    measured.choice(workload)
+    measured
 }
 
 /// Takes the cache's lock, waiting for another measuring process; `None` where it cannot.
@@ -277,7 +293,7 @@ fn measure_and_announce(path: Option<&Path>) -> Measured {
 pub(crate) fn describe(m: &Measured) -> String {
     format!(
         "--precision auto: {} for training ({:.0} ms a step against {:.0} ms in {}), {} for \
-         inference ({:.0} ms for 8 rotations against {:.0} ms in {})",
+         inference ({:.0} ms for 8 rotations against {:.0} ms in {}); fp32 trains in {} layout",
         m.train.name(),
         m.fp32.min_or(&m.bf16, Workload::Train, m.train),
         m.fp32.max_or(&m.bf16, Workload::Train, m.train),
@@ -286,6 +302,10 @@ pub(crate) fn describe(m: &Measured) -> String {
         m.fp32.min_or(&m.bf16, Workload::Infer, m.infer),
         m.fp32.max_or(&m.bf16, Workload::Infer, m.infer),
         other(m.infer).name(),
+        match m.fp32_train_channels_last {
+            true => "channels_last",
+            false => "the default",
+        }
     )
 }
 
@@ -350,13 +370,15 @@ pub(crate) fn measure(machine: MachineKey) -> Measured {
     let side = i64::from(IMAGE_SIZE);
     let rotations = pattern(&[BINS as i64, 3, side, side]);
 
-    let mut train = |precision: Precision| {
-        let l = loss(&net, &crops, &target, precision);
+    let crops_channels_last = super::unet::channels_last(&crops);
+    let mut train = |precision: Precision, input: &Tensor| {
+        let l = loss(&net, input, &target, precision);
         l.backward();
         adam.step();
     };
-    let fp32_train = timed(|| train(Precision::Fp32), None);
-    let bf16_train = timed(|| train(Precision::Bf16), Some(fp32_train));
+    let fp32_train = timed(|| train(Precision::Fp32, &crops), None);
+    let fp32_train_channels_last_ms = timed(|| train(Precision::Fp32, &crops_channels_last), None);
+    let bf16_train = timed(|| train(Precision::Bf16, &crops), Some(fp32_train));
     let infer = |precision: Precision| {
         tch::no_grad(|| {
             let batch = super::inference::network_layout(&rotations, precision);
@@ -380,6 +402,8 @@ pub(crate) fn measure(machine: MachineKey) -> Measured {
         infer: faster(&fp32, &bf16, Workload::Infer),
         fp32,
         bf16,
+        fp32_train_channels_last_ms,
+        fp32_train_channels_last: fp32_train_channels_last_ms < MARGIN * fp32_train,
     }
 }
 
@@ -461,6 +485,8 @@ mod tests {
             bf16: timing(1.0, 1.0),
             train,
             infer: Precision::Fp32,
+            fp32_train_channels_last_ms: 1.0,
+            fp32_train_channels_last: false,
         };
         write_cache(&path, &entry(here.clone(), Precision::Fp32)).unwrap();
         write_cache(&path, &entry(capped.clone(), Precision::Fp32)).unwrap();

@@ -53,6 +53,11 @@ pub struct TrainConfig {
     /// epoch). 0: every image, as `train` does.
     #[serde(default, skip_serializing_if = "is_zero")]
     pub(crate) epoch_samples: u32,
+    /// fp32 training steps run their batches in channels_last layout, where this machine
+    /// measured them faster (model::autotune). Not recorded: the arithmetic is the same, only
+    /// the kernels' order of operations differs; a resumed run on the machine measures alike.
+    #[serde(skip)]
+    pub(crate) channels_last: bool,
 }
 
 fn is_zero(value: &u32) -> bool {
@@ -105,6 +110,7 @@ impl Default for TrainConfig {
             trial_weight: default_trial_weight(),
             trial_sigma_px: 0.0,
             epoch_samples: 0,
+            channels_last: false,
         }
     }
 }

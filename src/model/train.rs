@@ -200,9 +200,18 @@ pub(crate) fn weighted_loss(logits: &Tensor, target: &Tensor, weights: Option<&T
 }
 
 /// The loss of a batch of samples.
-fn samples_loss(net: &MiniUNet, samples: &[Sample], precision: Precision) -> Tensor {
+fn samples_loss(
+    net: &MiniUNet,
+    samples: &[Sample],
+    precision: Precision,
+    channels_last: bool,
+) -> Tensor {
     let size = (samples[0].target.len() as f64).sqrt() as i64;
     let (input, target) = batch(samples, size);
+    let input = match (precision, channels_last) {
+        (Precision::Fp32, true) => crate::model::unet::channels_last(&input),
+        _ => input,
+    };
     let weights = batch_weights(samples, size);
     weighted_loss(
         &net.forward_with(&input, precision),
@@ -257,7 +266,7 @@ pub(crate) fn train_epoch(
                 }
             })
             .collect();
-        let l = samples_loss(net, &samples, config.precision);
+        let l = samples_loss(net, &samples, config.precision, config.channels_last);
         l.backward();
         adam.step();
         let value = l.double_value(&[]);
@@ -299,7 +308,7 @@ pub(crate) fn validate(net: &MiniUNet, data: Subset, config: &TrainConfig) -> f6
                 .iter()
                 .map(|&i| training_sample(&images[i], config.trial_weighting(), None))
                 .collect();
-            total += samples_loss(net, &samples, config.precision).double_value(&[])
+            total += samples_loss(net, &samples, config.precision, false).double_value(&[])
                 * chunk.len() as f64;
         }
         total / indices.len().max(1) as f64

@@ -59,6 +59,13 @@ fn under_an_avx2_cap_auto_keeps_the_faster_precision_and_reuses_it() {
             "{workload}: fp32 {fp32} ms, bf16 {bf16} ms"
         );
     }
+    let plain = entry["fp32"]["train_step_ms"].as_f64().unwrap();
+    let channels_last = entry["fp32_train_channels_last_ms"].as_f64().unwrap();
+    assert_eq!(
+        entry["fp32_train_channels_last"],
+        channels_last < 0.95 * plain,
+        "fp32 training: {plain} ms, {channels_last} ms in channels_last"
+    );
     // The bench ran in the kept training choice.
     assert_eq!(json(&report)["results"]["precision"], entry["train"]);
 

@@ -23,7 +23,7 @@ use crate::model::checkpoint::{
 };
 use crate::model::config::{Plateau, TrainConfig};
 use crate::model::train::{train_epoch, validate, Adam, Subset};
-use crate::model::unet::MiniUNet;
+use crate::model::unet::{MiniUNet, Precision};
 use crate::named::{counted, Named};
 use crate::present::envelope::write_report;
 use epoch_files::{save_loss_curve, save_training_vis, write_losses_csv};
@@ -82,6 +82,8 @@ pub(crate) fn run(context: &Context, mut options: TrainOptions) -> anyhow::Resul
             options.config.precision = meta.config.precision;
         }
     }
+    options.config.channels_last = options.config.precision == Precision::Fp32
+        && crate::model::autotune::fp32_trains_channels_last();
     let config = options.config.clone();
     crate::model::use_threads(context.threads);
     tch::manual_seed(config.seed as i64);
