@@ -258,32 +258,23 @@ pub(crate) fn precision(context: &Context) -> anyhow::Result<()> {
     let (measured, kept) = autotune::remeasure()?;
     let key = &measured.machine;
     context.say(&format!(
-        "{}, {}, {}, {} threads",
+        "{}, {}, {} threads",
         key.cpu_model,
-        key.onednn_max_cpu_isa
-            .as_ref()
-            .map_or("no ONEDNN_MAX_CPU_ISA cap".to_owned(), |c| format!(
-                "ONEDNN_MAX_CPU_ISA={c}"
-            )),
-        key.aten_cpu_capability
-            .as_ref()
-            .map_or("no ATEN_CPU_CAPABILITY".to_owned(), |c| format!(
-                "ATEN_CPU_CAPABILITY={c}"
-            )),
+        key.caps(),
         measured.threads
     ));
     context.say(&format!(
-        "{:<6} {:>14} {:>22}",
+        "{:<19} {:>14} {:>22}",
         "", "train ms/step", "infer 8 rotations ms"
     ));
     for (name, t) in [("fp32", &measured.fp32), ("bf16", &measured.bf16)] {
         context.say(&format!(
-            "{name:<6} {:>14.1} {:>22.1}",
+            "{name:<19} {:>14.1} {:>22.1}",
             t.train_step_ms, t.infer_ms
         ));
     }
     context.say(&format!(
-        "{:<6} {:>14.1} {:>22}",
+        "{:<19} {:>14.1} {:>22}",
         "fp32, channels_last", measured.fp32_train_channels_last_ms, "–"
     ));
     context.say(&format!(

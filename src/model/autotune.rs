@@ -78,8 +78,13 @@ const DECIDING_FLAGS: [&str; 7] = [
 ];
 
 impl MachineKey {
-    /// This process's machine and caps.
+    /// This process's machine and caps, read once: neither changes while it runs.
     pub(crate) fn here() -> Self {
+        static HERE: std::sync::OnceLock<MachineKey> = std::sync::OnceLock::new();
+        HERE.get_or_init(Self::read).clone()
+    }
+
+    fn read() -> Self {
         let cpuinfo = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
         let field = |name: &str| {
             cpuinfo.lines().find_map(|line| {
@@ -102,12 +107,17 @@ impl MachineKey {
         }
     }
 
-    /// The cap in words, for messages.
-    fn cap(&self) -> String {
-        match &self.onednn_max_cpu_isa {
-            Some(cap) => format!("ONEDNN_MAX_CPU_ISA={cap}"),
-            None => "no ISA cap".to_owned(),
-        }
+    /// The caps in words, for messages.
+    pub(crate) fn caps(&self) -> String {
+        let cap = |name: &str, value: &Option<String>| match value {
+            Some(v) => format!("{name}={v}"),
+            None => format!("no {name}"),
+        };
+        format!(
+            "{}, {}",
+            cap("ONEDNN_MAX_CPU_ISA", &self.onednn_max_cpu_isa),
+            cap("ATEN_CPU_CAPABILITY", &self.aten_cpu_capability)
+        )
     }
 }
 
@@ -279,7 +289,7 @@ fn measure_and_announce(path: Option<&Path>) -> Measured {
         eprintln!(
             "--precision auto: timing fp32 and bf16 once on this CPU ({}, {}); {kept}",
             machine.cpu_model,
-            machine.cap()
+            machine.caps()
         );
     }
     let measured = measure(machine);
@@ -290,45 +300,29 @@ fn measure_and_announce(path: Option<&Path>) -> Measured {
 }
 
 /// One line on the choice and its figures.
-pub(crate) fn describe(m: &Measured) -> String {
+fn describe(m: &Measured) -> String {
+    let line = |workload: Workload, what: &str| {
+        let (chosen, other) = match m.choice(workload) {
+            Precision::Fp32 => (&m.fp32, (&m.bf16, Precision::Bf16)),
+            Precision::Bf16 => (&m.bf16, (&m.fp32, Precision::Fp32)),
+        };
+        format!(
+            "{} for {what} ({:.0} ms against {:.0} ms in {})",
+            m.choice(workload).name(),
+            chosen.of(workload),
+            other.0.of(workload),
+            other.1.name()
+        )
+    };
     format!(
-        "--precision auto: {} for training ({:.0} ms a step against {:.0} ms in {}), {} for \
-         inference ({:.0} ms for 8 rotations against {:.0} ms in {}); fp32 trains in {} layout",
-        m.train.name(),
-        m.fp32.min_or(&m.bf16, Workload::Train, m.train),
-        m.fp32.max_or(&m.bf16, Workload::Train, m.train),
-        other(m.train).name(),
-        m.infer.name(),
-        m.fp32.min_or(&m.bf16, Workload::Infer, m.infer),
-        m.fp32.max_or(&m.bf16, Workload::Infer, m.infer),
-        other(m.infer).name(),
+        "--precision auto: {}, {}; fp32 trains in {} layout",
+        line(Workload::Train, "a training step"),
+        line(Workload::Infer, "8 rotations"),
         match m.fp32_train_channels_last {
             true => "channels_last",
             false => "the default",
         }
     )
-}
-
-fn other(p: Precision) -> Precision {
-    match p {
-        Precision::Fp32 => Precision::Bf16,
-        Precision::Bf16 => Precision::Fp32,
-    }
-}
-
-impl Timing {
-    /// The chosen precision's figure (self is fp32's).
-    fn min_or(&self, bf16: &Timing, w: Workload, chosen: Precision) -> f64 {
-        match chosen {
-            Precision::Fp32 => self.of(w),
-            Precision::Bf16 => bf16.of(w),
-        }
-    }
-
-    /// The other precision's figure (self is fp32's).
-    fn max_or(&self, bf16: &Timing, w: Workload, chosen: Precision) -> f64 {
-        self.min_or(bf16, w, other(chosen))
-    }
 }
 
 /// Times both precisions on both workloads with libtorch's current threads, fp32 first; a
