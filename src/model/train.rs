@@ -17,6 +17,7 @@ use tch::{Kind, Reduction, Tensor};
 use super::config::TrainConfig;
 use crate::data::augment::AugmentConfig;
 use crate::data::dataset::{crop_sample, training_sample, LabelledImage, Sample, Supervision};
+use crate::model::inference::network_layout;
 use crate::model::unet::{MiniUNet, Precision};
 
 /// Adam (β 0.9/0.999, ε 1e-8, no weight decay), PyTorch's update rule.
@@ -199,18 +200,35 @@ pub(crate) fn weighted_loss(logits: &Tensor, target: &Tensor, weights: Option<&T
     }
 }
 
+/// How a batch is laid out before the network sees it.
+#[derive(Clone, Copy)]
+enum Layout {
+    /// A training step's: fp32 batches in channels_last where the machine's measurement found
+    /// its backward pass faster so.
+    Training { channels_last: bool },
+    /// Eval's ([`network_layout`]): a forward pass alone, whose faster layout validation
+    /// shares ([training](../../BENCHMARKS.md#training-step-and-validation)).
+    Inference,
+}
+
 /// The loss of a batch of samples.
 fn samples_loss(
     net: &MiniUNet,
     samples: &[Sample],
     precision: Precision,
-    channels_last: bool,
+    layout: Layout,
 ) -> Tensor {
     let size = (samples[0].target.len() as f64).sqrt() as i64;
     let (input, target) = batch(samples, size);
-    let input = match (precision, channels_last) {
-        (Precision::Fp32, true) => crate::model::unet::channels_last(&input),
-        _ => input,
+    let input = match (layout, precision) {
+        (Layout::Inference, _) => network_layout(&input, precision),
+        (
+            Layout::Training {
+                channels_last: true,
+            },
+            Precision::Fp32,
+        ) => crate::model::unet::channels_last(&input),
+        (Layout::Training { .. }, _) => input,
     };
     let weights = batch_weights(samples, size);
     weighted_loss(
@@ -266,7 +284,10 @@ pub(crate) fn train_epoch(
                 }
             })
             .collect();
-        let l = samples_loss(net, &samples, config.precision, config.channels_last);
+        let layout = Layout::Training {
+            channels_last: config.channels_last,
+        };
+        let l = samples_loss(net, &samples, config.precision, layout);
         l.backward();
         adam.step();
         let value = l.double_value(&[]);
@@ -308,7 +329,8 @@ pub(crate) fn validate(net: &MiniUNet, data: Subset, config: &TrainConfig) -> f6
                 .iter()
                 .map(|&i| training_sample(&images[i], config.trial_weighting(), None))
                 .collect();
-            total += samples_loss(net, &samples, config.precision, false).double_value(&[])
+            total += samples_loss(net, &samples, config.precision, Layout::Inference)
+                .double_value(&[])
                 * chunk.len() as f64;
         }
         total / indices.len().max(1) as f64

@@ -133,6 +133,18 @@ fn conv_bf16(x: &Tensor, conv: &nn::Conv2D) -> Tensor {
     x.conv2d(&w, b, [1, 1], [k / 2, k / 2], [1, 1], 1)
 }
 
+/// A float32 transposed convolution with its bias added as a separate broadcast, which gives
+/// the same forward values: oneDNN computes a transposed convolution's bias gradient in its
+/// scalar reference kernel, and ATen's reduction over the added bias is several times faster
+/// ([training](../../BENCHMARKS.md#training-step-and-validation)).
+fn up_fp32(x: &Tensor, up: &nn::ConvTranspose2D) -> Tensor {
+    let unbiased = x.conv_transpose2d::<Tensor>(&up.ws, None, [2, 2], [0, 0], [0, 0], 1, [1, 1]);
+    match &up.bs {
+        Some(b) => unbiased + b.view([1, -1, 1, 1]),
+        None => unbiased,
+    }
+}
+
 fn up_bf16(x: &Tensor, up: &nn::ConvTranspose2D) -> Tensor {
     let w = channels_last(&up.ws.to_kind(Kind::BFloat16));
     let b = up.bs.as_ref().map(|b| b.to_kind(Kind::BFloat16));
@@ -149,7 +161,7 @@ impl MiniUNet {
             Precision::Bf16 => conv_bf16(x, layer),
         };
         let up = |x: &Tensor, layer: &nn::ConvTranspose2D| match precision {
-            Precision::Fp32 => x.apply(layer),
+            Precision::Fp32 => up_fp32(x, layer),
             Precision::Bf16 => up_bf16(x, layer),
         };
         let x = match precision {

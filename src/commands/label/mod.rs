@@ -108,7 +108,6 @@ fn label(context: &Context, args: &LabelConfig, store: &LabelStore) -> anyhow::R
             labels_in(&labels, &split.train, args.per_object),
         )
     };
-    let stop = AtomicBool::new(false);
     let job = ObjectJob {
         context,
         args,
@@ -117,7 +116,6 @@ fn label(context: &Context, args: &LabelConfig, store: &LabelStore) -> anyhow::R
         clicker: &clicker,
         bar: &bar,
         verbose_rounds: !matches!(clicker, Clicker::Scripted { .. }),
-        stop: &stop,
     };
     let workers = if by_hand {
         1
@@ -312,13 +310,31 @@ struct ObjectJob<'a> {
     clicker: &'a Clicker,
     bar: &'a indicatif::ProgressBar,
     verbose_rounds: bool,
-    stop: &'a AtomicBool,
+}
+
+/// One round to play: training object `j`'s round `round`.
+struct RoundJob {
+    j: usize,
+    round: u32,
+}
+
+/// A round played in the simulator, waiting to be stored in its turn.
+struct Played {
+    j: usize,
+    round: u32,
+    frame: Frame,
+    click: Result<PixelGrasp, String>,
+    tried: Tried,
 }
 
 impl ObjectJob<'_> {
-    /// Labels every object on `workers` threads, objects handed out in split order. Objects are
-    /// independent (each has its own rounds and seeds); the dataset files are written under one
-    /// lock, in split order, so the result does not depend on which worker finishes first.
+    /// Labels every object on `workers` threads. The rounds, not the objects, are shared out: a
+    /// run of five objects on two cores would otherwise leave one core idle for the fifth. Each
+    /// wave plays, for every object still short, just the rounds that its missing labels need at
+    /// the least (a round stores at most one label), so no round is played that one object at a
+    /// time would not have played too; the rounds are stored in object and round order, so the
+    /// files do not depend on which worker finishes first. One worker (a person clicking) takes
+    /// the objects one after another, as before.
     fn label_all(
         &self,
         objects: &[String],
@@ -326,51 +342,51 @@ impl ObjectJob<'_> {
         shared: &Mutex<Shared>,
         workers: usize,
     ) -> anyhow::Result<Vec<ObjectSummary>> {
-        let jobs: Vec<usize> = (0..objects.len()).collect();
-        let mut summaries = Vec::new();
-        crate::commands::workers::run_in_order(
-            &jobs,
-            workers,
-            || Ok(()),
-            |(), &j| {
-                let outcome = self.label_object(j, &objects[j], models, shared);
-                if outcome.is_err() {
-                    // The objects being labelled stop at their next round, not only the
-                    // ones not yet started.
-                    self.stop.store(true, Ordering::SeqCst);
+        let mut summaries: Vec<ObjectSummary> = objects
+            .iter()
+            .map(|object| ObjectSummary {
+                object: object.clone(),
+                ..Default::default()
+            })
+            .collect();
+        let groups: Vec<Vec<usize>> = match workers {
+            1 => (0..objects.len()).map(|j| vec![j]).collect(),
+            _ => vec![(0..objects.len()).collect()],
+        };
+        for group in groups {
+            loop {
+                let wave = self.next_wave(&group, objects, shared)?;
+                if wave.is_empty() || interrupt::requested().is_some() {
+                    break;
                 }
-                outcome.map(Some)
-            },
-            |summary| summaries.push(summary),
-        )?;
+                self.play_wave(&wave, objects, models, shared, workers, &mut summaries)?;
+            }
+        }
+        let state = lock(shared);
+        for summary in &mut summaries {
+            summary.rounds = state.progress.rounds_of(&summary.object);
+            summary.labels = state.labels.of(&summary.object).len();
+        }
         Ok(summaries)
     }
 
-    /// Runs rounds for training object `j` until it has its labels.
-    fn label_object(
+    /// The rounds that the objects of `group` still short of labels need at the least, or the
+    /// error of one that has used up `--max-rounds`.
+    fn next_wave(
         &self,
-        j: usize,
-        object: &str,
-        models: &[ObjectModel],
+        group: &[usize],
+        objects: &[String],
         shared: &Mutex<Shared>,
-    ) -> anyhow::Result<ObjectSummary> {
+    ) -> anyhow::Result<Vec<RoundJob>> {
         let args = self.args;
-        let mut summary = ObjectSummary {
-            object: object.to_owned(),
-            ..Default::default()
-        };
-        let (mut round, mut have) = {
-            let state = lock(shared);
-            (
-                state.progress.rounds_of(object),
-                state.labels.of(object).len(),
-            )
-        };
-        while have < args.per_object as usize {
-            if self.stop.load(Ordering::SeqCst) || interrupt::requested().is_some() {
-                // Another object failed, or a signal asked to stop: this one resumes on the
-                // next run, from the rounds saved so far.
-                break;
+        let state = lock(shared);
+        let mut wave = Vec::new();
+        for &j in group {
+            let object = &objects[j];
+            let have = state.labels.of(object).len();
+            let round = state.progress.rounds_of(object);
+            if have >= args.per_object as usize {
+                continue;
             }
             if round >= args.max_rounds {
                 bail!(
@@ -379,47 +395,109 @@ impl ObjectJob<'_> {
                     args.max_rounds
                 );
             }
-            let round_seed = rounds::round_seed(args.seed, j, round)?;
-            self.bar
-                .set_message(format!("{object} {have}/{} round {round}", args.per_object));
-            let (mut cell, id) = rounds::round_scene(models, j, args.clutter, round_seed)?;
-            let frame = cell.capture();
-            let camera = *cell.camera();
-            let click = self
-                .clicker
-                .click(object, id, round, round_seed, &camera, &frame)?;
-            let tried = self.try_click(&mut cell, &frame, &click);
-            let (reason, detail) = (tried.0, tried.1.clone());
-            let line = round_line(object, round, &click, reason, &detail);
-            round += 1;
-            let done = RoundDone {
-                object,
-                rounds: round,
-                frame: &frame,
-                click: &click,
-                tried,
-            };
-            have = self.record_round(shared, done, &mut summary)?;
-            if self.verbose_rounds || reason != PickReason::Success {
-                self.bar.suspend(|| self.context.say(&line));
-            }
+            let missing = args.per_object - have as u32;
+            let last = round.saturating_add(missing).min(args.max_rounds);
+            wave.extend((round..last).map(|round| RoundJob { j, round }));
         }
-        summary.rounds = round;
-        summary.labels = have;
-        Ok(summary)
+        Ok(wave)
+    }
+
+    /// Plays a wave's rounds on `workers` threads and stores each in wave order.
+    fn play_wave(
+        &self,
+        wave: &[RoundJob],
+        objects: &[String],
+        models: &[ObjectModel],
+        shared: &Mutex<Shared>,
+        workers: usize,
+        summaries: &mut [ObjectSummary],
+    ) -> anyhow::Result<()> {
+        // A round that cannot be stored stops the wave: the rounds after it are not played.
+        let unstored = AtomicBool::new(false);
+        let mut stored = Ok(());
+        crate::commands::workers::run_in_order(
+            wave,
+            workers,
+            || Ok(()),
+            |(), job| match unstored.load(Ordering::SeqCst) {
+                true => Ok(None),
+                false => self.play(job, &objects[job.j], models),
+            },
+            |played| {
+                if stored.is_ok() {
+                    stored = self.store_round(played, objects, shared, summaries);
+                    unstored.store(stored.is_err(), Ordering::SeqCst);
+                }
+            },
+        )?;
+        stored
+    }
+
+    /// Plays one round: its scene, the click and the pick. `None` when a signal asked to stop:
+    /// the object resumes on the next run, from the rounds saved so far.
+    fn play(
+        &self,
+        job: &RoundJob,
+        object: &str,
+        models: &[ObjectModel],
+    ) -> anyhow::Result<Option<Played>> {
+        if interrupt::requested().is_some() {
+            return Ok(None);
+        }
+        let RoundJob { j, round } = *job;
+        let round_seed = rounds::round_seed(self.args.seed, j, round)?;
+        self.bar.set_message(format!("{object} round {round}"));
+        let (mut cell, id) = rounds::round_scene(models, j, self.args.clutter, round_seed)?;
+        let frame = cell.capture();
+        let camera = *cell.camera();
+        let click = self
+            .clicker
+            .click(object, id, round, round_seed, &camera, &frame)?;
+        let tried = self.try_click(&mut cell, &frame, &click);
+        Ok(Some(Played {
+            j,
+            round,
+            frame,
+            click,
+            tried,
+        }))
+    }
+
+    /// Stores a played round and says how it went when it failed (or always, by hand).
+    fn store_round(
+        &self,
+        played: Played,
+        objects: &[String],
+        shared: &Mutex<Shared>,
+        summaries: &mut [ObjectSummary],
+    ) -> anyhow::Result<()> {
+        let object = &objects[played.j];
+        let (reason, detail) = (played.tried.0, played.tried.1.clone());
+        let line = round_line(object, played.round, &played.click, reason, &detail);
+        let done = RoundDone {
+            object,
+            rounds: played.round + 1,
+            frame: &played.frame,
+            click: &played.click,
+            tried: played.tried,
+        };
+        self.record_round(shared, done, &mut summaries[played.j])?;
+        if self.verbose_rounds || reason != PickReason::Success {
+            self.bar.suspend(|| self.context.say(&line));
+        }
+        Ok(())
     }
 }
 
 impl ObjectJob<'_> {
     /// Stores a round's outcome under the dataset's lock: the label when the click succeeded,
     /// the rounds and sources in the progress file, and the attempt for the labels page.
-    /// Returns the object's labels now.
     fn record_round(
         &self,
         shared: &Mutex<Shared>,
         done: RoundDone,
         summary: &mut ObjectSummary,
-    ) -> anyhow::Result<usize> {
+    ) -> anyhow::Result<()> {
         let RoundDone {
             object,
             rounds,
@@ -462,7 +540,7 @@ impl ObjectJob<'_> {
                 frames: film,
             })?;
         }
-        Ok(have)
+        Ok(())
     }
 
     /// Runs the clicked grasp in the simulator: its reason, detail, the object it carried, and
