@@ -211,13 +211,13 @@ enum Layout {
     Inference,
 }
 
-/// The loss of a batch of samples.
+/// The logits of a batch of samples and its loss.
 fn samples_loss(
     net: &MiniUNet,
     samples: &[Sample],
     precision: Precision,
     layout: Layout,
-) -> Tensor {
+) -> (Tensor, Tensor) {
     let size = (samples[0].target.len() as f64).sqrt() as i64;
     let (input, target) = batch(samples, size);
     let input = match (layout, precision) {
@@ -231,11 +231,9 @@ fn samples_loss(
         (Layout::Training { .. }, _) => input,
     };
     let weights = batch_weights(samples, size);
-    weighted_loss(
-        &net.forward_with(&input, precision),
-        &target,
-        weights.as_ref(),
-    )
+    let logits = net.forward_with(&input, precision);
+    let loss = weighted_loss(&logits, &target, weights.as_ref());
+    (logits, loss)
 }
 
 /// The per-epoch RNG: a pure function of the seed and the epoch, so a resumed run draws the
@@ -287,7 +285,7 @@ pub(crate) fn train_epoch(
         let layout = Layout::Training {
             channels_last: config.channels_last,
         };
-        let l = samples_loss(net, &samples, config.precision, layout);
+        let (_, l) = samples_loss(net, &samples, config.precision, layout);
         l.backward();
         adam.step();
         let value = l.double_value(&[]);
@@ -319,37 +317,38 @@ fn within_budget(order: &mut Vec<usize>, images: &[LabelledImage], budget: usize
     });
 }
 
-/// Mean validation loss over unaugmented samples.
-pub(crate) fn validate(net: &MiniUNet, data: Subset, config: &TrainConfig) -> f64 {
+/// An epoch's validation.
+pub(crate) struct Validation {
+    /// Mean loss over the unaugmented samples.
+    pub(crate) loss: f64,
+    /// The first sample's predicted affordance (sigmoid), H×W in [0, 1], for the epoch's
+    /// picture: the pass that scored it, so the picture costs no forward pass of its own.
+    pub(crate) first_map: Option<Vec<f32>>,
+}
+
+/// Scores the validation samples, unaugmented.
+pub(crate) fn validate(net: &MiniUNet, data: Subset, config: &TrainConfig) -> Validation {
     let (images, indices, batch_size) = (data.images, data.indices, config.batch_size);
     tch::no_grad(|| {
         let mut total = 0.0;
+        let mut first_map = None;
         for chunk in indices.chunks(batch_size) {
             let samples: Vec<Sample> = chunk
                 .iter()
                 .map(|&i| training_sample(&images[i], config.trial_weighting(), None))
                 .collect();
-            total += samples_loss(net, &samples, config.precision, Layout::Inference)
-                .double_value(&[])
-                * chunk.len() as f64;
+            let (logits, loss) = samples_loss(net, &samples, config.precision, Layout::Inference);
+            total += loss.double_value(&[]) * chunk.len() as f64;
+            if first_map.is_none() {
+                let map = logits.get(0).sigmoid().to_kind(Kind::Float).flatten(0, -1);
+                first_map =
+                    Some(Vec::<f32>::try_from(map).expect("a float tensor converts to Vec<f32>"));
+            }
         }
-        total / indices.len().max(1) as f64
-    })
-}
-
-/// The predicted affordance (sigmoid) for one sample, H×W in [0, 1].
-pub(crate) fn predict_map(net: &MiniUNet, sample: &Sample, precision: Precision) -> Vec<f32> {
-    tch::no_grad(|| {
-        let (input, _) = batch(
-            std::slice::from_ref(sample),
-            crate::grasp::IMAGE_SIZE as i64,
-        );
-        let out = net
-            .forward_with(&input, precision)
-            .sigmoid()
-            .to_kind(Kind::Float)
-            .flatten(0, -1);
-        Vec::<f32>::try_from(out).expect("a float tensor converts to Vec<f32>")
+        Validation {
+            loss: total / indices.len().max(1) as f64,
+            first_map,
+        }
     })
 }
 

@@ -11,8 +11,6 @@ use crate::grasp::draw::{draw_gripper, JawPx};
 use crate::grasp::rotate::unrotate_plane;
 use crate::grasp::{bin_angle, IMAGE_SIZE};
 use crate::model::checkpoint::EpochRecord;
-use crate::model::train::predict_map;
-use crate::model::unet::{MiniUNet, Precision};
 use crate::vision::annotate::{caption, register_font, with_heat_legend, FONT};
 use crate::vision::camera::Camera;
 use crate::vision::colormap::{heat_overlay, HeatRange};
@@ -95,20 +93,19 @@ pub(super) fn save_loss_curve(path: &Path, history: &[EpochRecord]) -> anyhow::R
 /// The picture of one fixed validation image, 768 × 278: the image with its label drawn as the
 /// gripper, then the network's map for the label's angle and the training target, each as heat
 /// over the image in the image's own frame, all at twice the camera's size. The prediction is
-/// coloured over its own range (the colour bar states it), the target over 0–1.
+/// coloured over its own range (the colour bar states it), the target over 0–1. `prediction`
+/// is the network's map of the image as validation scored it, in the label's rotated frame.
 pub(super) fn save_training_vis(
-    net: &MiniUNet,
+    prediction: &[f32],
     item: &LabelledImage,
     dir: &Path,
     epoch: u32,
-    precision: Precision,
 ) -> anyhow::Result<()> {
     const SCALE: u32 = 2;
     let sample = training_sample(item, TrialWeighting::default(), None);
-    let prediction = predict_map(net, &sample, precision);
     let size = IMAGE_SIZE;
     let angle = bin_angle(sample.bin);
-    let prediction = unrotate_plane(&prediction, size, angle);
+    let prediction = unrotate_plane(prediction, size, angle);
     let target = unrotate_plane(&sample.target, size, angle);
     let range = HeatRange::of(prediction.iter().copied());
     let fixed = HeatRange { lo: 0.0, hi: 1.0 };

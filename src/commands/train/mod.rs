@@ -538,7 +538,7 @@ impl Run {
         let Some(train_loss) = train_loss else {
             return Ok(None);
         };
-        let val_loss = validate(
+        let validation = validate(
             &self.net,
             Subset {
                 images,
@@ -546,6 +546,7 @@ impl Run {
             },
             config,
         );
+        let val_loss = validation.loss;
         meta.history.push(EpochRecord {
             epoch,
             train_loss,
@@ -566,9 +567,9 @@ impl Run {
         save_checkpoint(&self.vs, &self.adam.named_state(), meta, out_dir, "last")?;
         write_losses_csv(&out_dir.join("losses.csv"), &meta.history)?;
         save_loss_curve(&out_dir.join("losses.png"), &meta.history)?;
-        if let Some(&first) = meta.val_indices.first() {
+        if let (Some(&first), Some(map)) = (meta.val_indices.first(), &validation.first_map) {
             let vis_dir = out_dir.join("training_vis");
-            save_training_vis(&self.net, &images[first], &vis_dir, epoch, config.precision)?;
+            save_training_vis(map, &images[first], &vis_dir, epoch)?;
         }
         Ok(Some(improved))
     }
