@@ -412,6 +412,16 @@ impl ObjectJob<'_> {
         workers: usize,
         summaries: &mut [ObjectSummary],
     ) -> anyhow::Result<()> {
+        if workers == 1 {
+            // By hand, a round is stored (and the page told) before the next one is shown.
+            for job in wave {
+                let Some(played) = self.play(job, &objects[job.j], models)? else {
+                    break;
+                };
+                self.store_round(played, objects, shared, summaries)?;
+            }
+            return Ok(());
+        }
         // A round that cannot be stored stops the wave: the rounds after it are not played.
         let unstored = AtomicBool::new(false);
         let mut stored = Ok(());
