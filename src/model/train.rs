@@ -207,7 +207,7 @@ enum Layout {
     /// its backward pass faster so.
     Training { channels_last: bool },
     /// Eval's ([`network_layout`]): a forward pass alone, whose faster layout validation
-    /// shares ([training](../../BENCHMARKS.md#training-step-and-validation)).
+    /// shares.
     Inference,
 }
 

@@ -135,8 +135,7 @@ fn conv_bf16(x: &Tensor, conv: &nn::Conv2D) -> Tensor {
 
 /// A float32 transposed convolution with its bias added as a separate broadcast, which gives
 /// the same forward values: oneDNN computes a transposed convolution's bias gradient in its
-/// scalar reference kernel, and ATen's reduction over the added bias is several times faster
-/// ([training](../../BENCHMARKS.md#training-step-and-validation)).
+/// scalar reference kernel, and ATen's reduction over the added bias is several times faster.
 fn up_fp32(x: &Tensor, up: &nn::ConvTranspose2D) -> Tensor {
     let unbiased = x.conv_transpose2d::<Tensor>(&up.ws, None, [2, 2], [0, 0], [0, 0], 1, [1, 1]);
     match &up.bs {
